@@ -1,0 +1,49 @@
+# Two commands do everything on a fresh Debian 12 machine: `make demo` and `make test`.
+# Every target installs what is missing first (Debian packages, only those absent).
+
+PRESET ?= release
+BUILD  := build/$(PRESET)
+CNCORE := $(BUILD)/src/app/cncore
+
+DEB_PACKAGES := cmake ninja-build g++ make pkg-config \
+  libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev libfast-float-dev \
+  libmuparser-dev libgtest-dev libgmock-dev libbenchmark-dev librapidcheck-dev
+
+.PHONY: all deps configure build test demo bench format clean
+
+all: build
+
+deps:
+	@missing=""; for p in $(DEB_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing:$$missing"; \
+	  SUDO=""; [ "$$(id -u)" -eq 0 ] || SUDO=sudo; \
+	  $$SUDO apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq --no-install-recommends $$missing; \
+	fi
+
+configure: deps
+	@cmake --preset $(PRESET) >/dev/null
+
+build: configure
+	@cmake --build --preset $(PRESET)
+
+test: build
+	@bash tools/run-tests.sh $(BUILD)
+
+demo: build
+	@mkdir -p out
+	$(CNCORE) run examples/seed-line-arc-line.ngc --summary out/demo-summary.json \
+	  --trajectory out/demo-trajectory.csv
+	@echo "wrote out/demo-summary.json and out/demo-trajectory.csv"
+
+bench: build
+	@bash bench/run.sh $(BUILD)
+
+format:
+	@git ls-files '*.cpp' '*.hpp' | xargs clang-format -i
+
+clean:
+	rm -rf build out

@@ -1,0 +1,65 @@
+// The machine a program runs on: interpolation period, path and axis limits, acc/dec and
+// tolerances. Loaded from TOML (load_machine_config) or the built-in default 3-axis mill.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "core/geometry.hpp"
+
+namespace cncore {
+
+struct AxisConfig {
+  bool enabled = false;
+  bool rotary = false;  // A, B, C: degrees instead of mm
+  double min_mm = 0;    // travel limits, machine coordinates
+  double max_mm = 0;
+  double max_speed_mm_min = 0;  // axis speed limit
+  double max_accel_mm_s2 = 0;   // axis acceleration limit
+};
+
+struct MachineConfig {
+  std::string name = "built-in 3-axis mill";
+
+  // [motion]
+  double period_s = 0.001;             // interpolation period τ
+  double max_feed_mm_min = 10000;      // Vmax for feed moves
+  double rapid_mm_min = 15000;         // G0 rate
+  double max_accel_mm_s2 = 2000;       // Amax, tangential and normal
+  double max_jerk_mm_s3 = 0;           // 0: no jerk stage; else T2 = Amax / Jmax
+  double contour_tolerance_mm = 0.01;  // corner rounding of the post-interpolation filter
+  double post_filter_s = 0;            // per-axis post-interpolation moving average; 0: off
+  std::uint32_t lookahead_blocks = 10000;  // capacity of the execution-data buffer
+  double max_override_pct = 200;       // highest feed override accepted
+  std::array<double, kMaxAxes> start_position{};  // machine position at program start
+
+  // [axes.x] ...
+  std::array<AxisConfig, kMaxAxes> axes{};
+
+  // [interpreter]
+  std::uint64_t max_loop_iterations = 1000000;  // runaway-loop guard for while/do/repeat
+  std::uint32_t max_call_depth = 64;            // O-word call nesting
+
+  std::size_t axis_count() const {
+    std::size_t n = 0;
+    for (const auto& a : axes) n += a.enabled ? 1 : 0;
+    return n;
+  }
+};
+
+// The built-in default: 3-axis mill, X −300…300, Y −200…200, Z −200…100 mm, feed 10 000 mm/min,
+// rapid 15 000 mm/min, acceleration 2 000 mm/s², period 1 ms, contour tolerance 0.01 mm.
+MachineConfig default_machine_config();
+
+// Reads a TOML file. Keys left out keep the built-in default. Unknown keys and out-of-range
+// values throw InputError naming the key (FILE:LINE:COL of the offending key).
+MachineConfig load_machine_config(const std::string& path);
+MachineConfig parse_machine_config(std::string_view toml_text, const std::string& source_name);
+
+// The configuration as TOML with a comment on every key (what `cncore machine` prints); parsing
+// this text gives back the same configuration.
+std::string machine_config_to_toml(const MachineConfig& config);
+
+}  // namespace cncore

@@ -1,0 +1,56 @@
+// The interface between the interpreter and the planner: one interpreted block of the part
+// program, in machine coordinates and mm (rotary axes in degrees), with its source line.
+// The interpreter knows nothing about time; the planner knows nothing about G-code syntax.
+#pragma once
+
+#include <cstdint>
+
+#include "core/geometry.hpp"
+
+namespace cncore {
+
+enum class BlockKind : std::uint8_t {
+  kRapid,  // G0: straight line at the machine's rapid rate
+  kLine,   // G1: straight line at the programmed feed
+  kArc,    // G2/G3: circular arc or helix
+  kDwell,  // G4: stop and wait dwell_s
+  kAux,    // M, S or T event (no motion)
+};
+
+// How the tool passes the end of a motion block (G61, G61.1, G64, G9).
+enum class PathMode : std::uint8_t {
+  kBlend,      // G64: keep moving; corners may round within tolerance_mm
+  kExactPath,  // G61: follow the programmed path exactly, no rounding, no forced stop
+  kExactStop,  // G61.1 or G9 (one block): speed 0 at the end of the block
+};
+
+struct Block {
+  BlockKind kind = BlockKind::kLine;
+  std::uint32_t line = 0;  // source line, 1-based
+  std::uint32_t col = 0;   // column of the first word of the block, 1-based
+
+  // Motion (kRapid, kLine, kArc). start equals the previous motion block's end.
+  AxisVec start;
+  AxisVec end;
+  double feed_mm_min = 0;  // programmed path feed (converted to mm/min); 0 for kRapid
+  PathMode path_mode = PathMode::kBlend;
+  double tolerance_mm = -1;  // G64 P value; < 0: the machine's contour tolerance
+
+  // Arc / helix (kArc). The motion turns counter-clockwise about `normal` (right-hand rule):
+  // G3 in G17 has normal +Z, G2 in G17 has -Z; G18 uses ±Y, G19 uses ±X.
+  // `center` is the centre projected into the plane of the start point; the displacement
+  // along `normal` from start to end is the helix rise. Other axes move linearly.
+  Vec3 center;
+  Vec3 normal{0, 0, 1};
+  std::uint32_t turns = 0;  // extra full turns (P word minus one)
+
+  // kDwell
+  double dwell_s = 0;
+
+  // kAux: letter 'M', 'S' or 'T' with its value (M6 → 'M', 6; S12000 → 'S', 12000).
+  char aux_letter = 0;
+  double aux_value = 0;
+  bool aux_waits = false;  // the motion must come to a stop before the event (M0, M1, M6, ...)
+};
+
+}  // namespace cncore

@@ -1,0 +1,42 @@
+// G-code interpreter (RS274/NGC as LinuxCNC documents it, with Fanuc habits): turns a part
+// program into a stream of Blocks in machine coordinates and mm. It streams: it reads the
+// program as it goes (seeking back only for loops and subroutine calls), so memory does not
+// grow with program length. It knows nothing about time.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "config/machine_config.hpp"
+#include "core/block.hpp"
+
+namespace cncore::interp {
+
+struct Options {
+  std::map<int, double> params;                // --param N=V: numbered parameters #N
+  std::map<std::string, double> named_params;  // --var NAME=V: named parameters #<NAME>
+};
+
+class Interpreter {
+ public:
+  // Opens the program file. Throws InputError if it cannot be read.
+  Interpreter(const std::string& path, const MachineConfig& machine, const Options& options);
+  ~Interpreter();
+  Interpreter(const Interpreter&) = delete;
+  Interpreter& operator=(const Interpreter&) = delete;
+
+  // Produces the next block. Returns false at the end of the program (M2, M30, or end of
+  // file). Throws InputError (FILE:LINE:COL) on the first error in the program.
+  bool next(Block& out);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// One line of `cncore check --blocks` for a block (stable text format used by golden tests).
+std::string format_block(const Block& block);
+
+}  // namespace cncore::interp

@@ -1,0 +1,73 @@
+// The motion kernel: execution-data buffer + look-ahead planner + per-cycle interpolation.
+// Blocks go in (push), one Sample per interpolation period comes out (step). step() is the
+// real-time motion cycle: no heap allocation, no I/O, no exceptions, and its cost does not
+// grow with segment count or program length (all buffers are sized at construction).
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <memory>
+
+#include "config/machine_config.hpp"
+#include "core/block.hpp"
+
+namespace cncore::motion {
+
+enum class Mode : std::uint8_t {
+  kLookahead,  // spec 01: passing speeds + look-ahead, no stop between blocks
+  kStop,       // the seed's conventional method: stop at the end of every block
+};
+
+struct KernelOptions {
+  Mode mode = Mode::kLookahead;
+  double override_pct = 100;  // initial feed override
+};
+
+// One interpolation cycle.
+struct Sample {
+  double t_s = 0;          // time of this sample; the first sample (t = 0) is the start position
+  std::uint32_t line = 0;  // source line of the block being executed, 0 when none
+  AxisVec position;        // axis set-points sent to the servos (after post-interpolation acc/dec)
+  AxisVec path_position;   // the interpolated point on the programmed path (before it)
+  double feed_mm_min = 0;  // commanded path speed this cycle
+  double override_pct = 100;
+  // Optional channels (specs 03, 04); NaN when the feature is not active.
+  double correction = std::nan("");
+  double load_pct = std::nan("");
+  double load_target_pct = std::nan("");
+  // Auxiliary event (M/S/T) reached in this cycle, kind kAux; aux_letter == 0 when none.
+  char aux_letter = 0;
+  double aux_value = 0;
+};
+
+class Kernel {
+ public:
+  Kernel(const MachineConfig& machine, const KernelOptions& options);
+  ~Kernel();
+  Kernel(const Kernel&) = delete;
+  Kernel& operator=(const Kernel&) = delete;
+
+  // True while the execution-data buffer has room for another block.
+  bool wants_block() const;
+  // Appends an interpreted block (motion, dwell or aux). Precondition: wants_block().
+  void push(const Block& block);
+  // No more blocks will come: the last block ends with a stop.
+  void end_of_program();
+
+  // One interpolation period. Writes the sample and returns true; returns false (writing
+  // nothing) once the program has ended and the machine has stopped at its end point.
+  // While blocks are still expected the kernel never moves past what it has been given:
+  // the buffer's last end point is treated as a stop until its successor arrives.
+  bool step(Sample& out);
+
+  // Feed override in percent (0 … max_override_pct); takes effect at the next cycle.
+  void set_override(double pct);
+  // Feed hold: decelerate along the path to a stop and wait; false resumes.
+  void set_feed_hold(bool hold);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace cncore::motion
