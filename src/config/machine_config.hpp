@@ -18,22 +18,24 @@ struct AxisConfig {
   double max_mm = 0;
   double max_speed_mm_min = 0;  // axis speed limit
   double max_accel_mm_s2 = 0;   // axis acceleration limit
+
+  friend bool operator==(const AxisConfig&, const AxisConfig&) = default;
 };
 
 struct MachineConfig {
   std::string name = "built-in 3-axis mill";
 
   // [motion]
-  double period_s = 0.001;             // interpolation period τ
-  double max_feed_mm_min = 10000;      // Vmax for feed moves
-  double rapid_mm_min = 15000;         // G0 rate
-  double max_accel_mm_s2 = 2000;       // Amax, tangential and normal
-  double max_jerk_mm_s3 = 0;           // 0: no jerk stage; else T2 = Amax / Jmax
-  double contour_tolerance_mm = 0.01;  // corner rounding of the post-interpolation filter
-  double post_filter_s = 0;            // per-axis post-interpolation moving average; 0: off
+  double period_s = 0.001;                 // interpolation period τ
+  double max_feed_mm_min = 10000;          // Vmax for feed moves
+  double rapid_mm_min = 15000;             // G0 rate
+  double max_accel_mm_s2 = 2000;           // Amax, tangential and normal
+  double max_jerk_mm_s3 = 0;               // 0: no jerk stage; else T2 = Amax / Jmax
+  double contour_tolerance_mm = 0.01;      // corner rounding of the post-interpolation filter
+  double post_filter_s = 0;                // per-axis post-interpolation moving average; 0: off
   std::uint32_t lookahead_blocks = 10000;  // capacity of the execution-data buffer
-  double max_override_pct = 200;       // highest feed override accepted
-  std::array<double, kMaxAxes> start_position{};  // machine position at program start
+  double max_override_pct = 200;           // highest feed override accepted
+  std::array<double, kMaxAxes> start_position{};  // position at program start ([axes.x] start_mm)
 
   // [axes.x] ...
   std::array<AxisConfig, kMaxAxes> axes{};
@@ -41,6 +43,8 @@ struct MachineConfig {
   // [interpreter]
   std::uint64_t max_loop_iterations = 1000000;  // runaway-loop guard for while/do/repeat
   std::uint32_t max_call_depth = 64;            // O-word call nesting
+
+  friend bool operator==(const MachineConfig&, const MachineConfig&) = default;
 
   std::size_t axis_count() const {
     std::size_t n = 0;
