@@ -182,9 +182,9 @@ INSTANTIATE_TEST_SUITE_P(
         // TOML syntax errors: position of the error, message says so.
         BadCase{"[motion]\nperiod_s = = 1\n", 2, 12, "TOML syntax"},
         BadCase{"[motion\n", 1, 8, "TOML syntax"}),
-    [](const ::testing::TestParamInfo<BadCase>& info) {
-      std::string name = std::to_string(info.index) + "_";
-      for (const char ch : std::string(info.param.fragment)) {
+    [](const ::testing::TestParamInfo<BadCase>& case_info) {
+      std::string name = std::to_string(case_info.index) + "_";
+      for (const char ch : std::string(case_info.param.fragment)) {
         name += std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
       }
       return name;
