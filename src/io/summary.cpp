@@ -1,0 +1,330 @@
+#include "io/summary.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "io/atomic_file.hpp"
+
+namespace cncore::io {
+
+namespace {
+
+constexpr std::size_t kSlowCandidates = 64;  // bounded candidate set for the slowest spots
+constexpr std::size_t kSlowReported = 5;
+constexpr std::size_t kMatchWindow = 16;  // blocks searched ahead when the line changes
+
+std::string axis_name(std::size_t i) {
+  return std::string(1,
+                     static_cast<char>(std::tolower(static_cast<unsigned char>(kAxisLetters[i]))));
+}
+
+// Distance from p to the segment a-b.
+double segment_distance(Vec3 p, Vec3 a, Vec3 b) {
+  const Vec3 ab = b - a;
+  const double len2 = dot(ab, ab);
+  double u = len2 > 0 ? dot(p - a, ab) / len2 : 0;
+  u = std::clamp(u, 0.0, 1.0);
+  return norm(p - (a + u * ab));
+}
+
+}  // namespace
+
+SummaryObserver::SummaryObserver(const MachineConfig& machine, std::string mode)
+    : machine_(machine) {
+  summary_.mode = std::move(mode);
+  // Window of on-path points searched for the contour error: the post-interpolation filter
+  // delays the set-point by at most its length; keep at least 20 ms in case the kernel smooths
+  // corners on its own.
+  const double window_s = std::max(machine.post_filter_s, 0.02);
+  const double cycles = std::ceil(window_s / machine.period_s) + 2;
+  path_ring_.resize(static_cast<std::size_t>(std::min(cycles, 4096.0)));
+  top_.reserve(kSlowCandidates);
+}
+
+void SummaryObserver::on_block(const Block& b) {
+  double cap = 0;
+  switch (b.kind) {
+    case BlockKind::kRapid:
+      cap = machine_.rapid_mm_min;
+      ++summary_.blocks;
+      pending_.push_back({b.line, cap, cap});
+      break;
+    case BlockKind::kLine:
+    case BlockKind::kArc:
+      cap = machine_.max_feed_mm_min;
+      ++summary_.blocks;
+      pending_.push_back({b.line, std::min(b.feed_mm_min, cap), cap});
+      break;
+    case BlockKind::kDwell:
+      pending_.push_back({b.line, 0, 0});
+      break;
+    case BlockKind::kAux:
+      break;
+  }
+  // The kernel never holds more than its buffer; if lines never match (a kernel that reports
+  // other line numbers), forget the oldest rather than grow.
+  while (pending_.size() > static_cast<std::size_t>(machine_.lookahead_blocks) + 1024) {
+    pending_.pop_front();
+  }
+}
+
+// The programmed feed of the block now executing on `line` (F clamped to the machine's limit),
+// matched in order against the blocks handed to the kernel. Returns -1 when unknown.
+const SummaryObserver::Pending* SummaryObserver::current_block(std::uint32_t line) {
+  const std::size_t n = std::min(pending_.size(), kMatchWindow);
+  for (std::size_t j = 0; j < n; ++j) {
+    if (pending_[j].line == line) {
+      pending_.erase(pending_.begin(), pending_.begin() + static_cast<std::ptrdiff_t>(j));
+      return &pending_.front();
+    }
+  }
+  return nullptr;
+}
+
+void SummaryObserver::close_group() {
+  if (group_.line == 0 || group_.time_s <= 0) {
+    group_ = SlowSpot{};
+    return;
+  }
+  group_.visits = 1;
+  auto same = std::find_if(top_.begin(), top_.end(),
+                           [&](const SlowSpot& s) { return s.line == group_.line; });
+  if (same != top_.end()) {
+    same->lost_s += group_.lost_s;
+    same->time_s += group_.time_s;
+    same->length_mm += group_.length_mm;
+    same->programmed_feed_mm_min = group_.programmed_feed_mm_min;
+    same->visits += 1;
+  } else if (top_.size() < kSlowCandidates) {
+    top_.push_back(group_);
+  } else {
+    auto least =
+        std::min_element(top_.begin(), top_.end(),
+                         [](const SlowSpot& a, const SlowSpot& b) { return a.lost_s < b.lost_s; });
+    if (group_.lost_s > least->lost_s) *least = group_;
+  }
+  group_ = SlowSpot{};
+}
+
+void SummaryObserver::travel_check(const motion::Sample& s) {
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    const AxisConfig& a = machine_.axes[i];
+    if (!a.enabled || travel_warned_[i]) continue;
+    const double p = s.position[i];
+    constexpr double kSlack = 1e-6;
+    if (p < a.min_mm - kSlack || p > a.max_mm + kSlack) {
+      travel_warned_[i] = true;
+      const char* unit = a.rotary ? "deg" : "mm";
+      summary_.warnings.push_back(fmt::format(
+          "axis {} leaves its travel at line {} (t = {:.3f} s): {} = {:.3f} {}, travel {} … {} {}",
+          kAxisLetters[i], s.line, s.t_s, kAxisLetters[i], p, unit, a.min_mm, a.max_mm, unit));
+    }
+  }
+}
+
+void SummaryObserver::on_sample(const motion::Sample& s) {
+  ++summary_.cycles;
+  summary_.cycle_time_s = s.t_s;
+  travel_check(s);
+
+  // Contour error: distance from the servo set-point to the polyline of recent on-path points.
+  const Vec3 path = s.path_position.xyz();
+  path_ring_[ring_next_] = path;
+  ring_next_ = (ring_next_ + 1) % path_ring_.size();
+  ring_size_ = std::min(ring_size_ + 1, path_ring_.size());
+  const Vec3 pos = s.position.xyz();  // disabled slots stay 0 in both
+  double contour = norm(pos - path);
+  for (std::size_t k = 1; k < ring_size_ && contour > 0; ++k) {
+    const std::size_t newer = (ring_next_ + path_ring_.size() - k) % path_ring_.size();
+    const std::size_t older = (newer + path_ring_.size() - 1) % path_ring_.size();
+    contour = std::min(contour, segment_distance(pos, path_ring_[older], path_ring_[newer]));
+  }
+  summary_.max_contour_error_mm = std::max(summary_.max_contour_error_mm, contour);
+
+  if (have_prev_) {
+    const double dt = s.t_s - prev_t_;
+    if (dt > 0) {
+      // Velocity over the last cycle (at the middle of the interval).
+      AxisVec vel;
+      double len2 = 0;
+      for (std::size_t i = 0; i < kMaxAxes; ++i) {
+        if (!machine_.axes[i].enabled) continue;
+        const double d = s.position[i] - prev_pos_[i];
+        vel[i] = d / dt;
+        if (!machine_.axes[i].rotary) len2 += d * d;
+        summary_.max_axis_speed_mm_min[i] =
+            std::max(summary_.max_axis_speed_mm_min[i], std::fabs(vel[i]) * 60);
+      }
+      const double len = std::sqrt(len2);
+      const double speed = len / dt;  // mm/s
+      summary_.path_length_mm += len;
+      summary_.max_feed_mm_min = std::max(summary_.max_feed_mm_min, speed * 60);
+      if (have_vel_) {
+        // Second differences: a = (v_k − v_{k−1}) / (distance between interval midpoints).
+        const double h = 0.5 * (dt + prev_dt_);
+        double dv2 = 0;
+        for (std::size_t i = 0; i < kMaxAxes; ++i) {
+          if (!machine_.axes[i].enabled) continue;
+          const double dv = vel[i] - prev_vel_[i];
+          summary_.max_axis_accel_mm_s2[i] =
+              std::max(summary_.max_axis_accel_mm_s2[i], std::fabs(dv) / h);
+          if (!machine_.axes[i].rotary) dv2 += dv * dv;
+        }
+        summary_.max_path_accel_mm_s2 = std::max(summary_.max_path_accel_mm_s2, std::sqrt(dv2) / h);
+        summary_.max_tangential_accel_mm_s2 =
+            std::max(summary_.max_tangential_accel_mm_s2, std::fabs(speed - prev_speed_) / h);
+      }
+      // Slowest spots: time lost on this line against its programmed feed × override.
+      if (s.line != group_.line) {
+        close_group();
+        group_.line = s.line;
+      }
+      if (s.line != 0) {
+        group_.time_s += dt;
+        group_.length_mm += len;
+        if (const Pending* b = current_block(s.line)) {
+          const double target = std::min(b->feed_mm_min * s.override_pct / 100, b->cap_mm_min);
+          group_.programmed_feed_mm_min = target;
+          if (target > 0 && speed * 60 < target) group_.lost_s += dt * (1 - speed * 60 / target);
+        }
+      }
+      prev_vel_ = vel;
+      prev_speed_ = speed;
+      prev_dt_ = dt;
+      have_vel_ = true;
+    }
+  }
+  prev_t_ = s.t_s;
+  prev_pos_ = s.position;
+  have_prev_ = true;
+}
+
+void SummaryObserver::on_finish() {
+  close_group();
+  std::sort(top_.begin(), top_.end(),
+            [](const SlowSpot& a, const SlowSpot& b) { return a.lost_s > b.lost_s; });
+  summary_.slowest.clear();
+  for (const SlowSpot& s : top_) {
+    if (summary_.slowest.size() == kSlowReported || s.lost_s < 1e-4) break;
+    summary_.slowest.push_back(s);
+  }
+  // Limits the machine must keep, checked on the measured trajectory (small numeric margin).
+  auto& w = summary_.warnings;
+  const double vmax = std::max(machine_.max_feed_mm_min, machine_.rapid_mm_min);
+  if (summary_.max_feed_mm_min > vmax * 1.001 + 1e-6) {
+    w.push_back(fmt::format("path speed {:.1f} mm/min exceeds the machine's {:.1f} mm/min",
+                            summary_.max_feed_mm_min, vmax));
+  }
+  if (summary_.max_tangential_accel_mm_s2 > machine_.max_accel_mm_s2 * 1.01 + 1e-3) {
+    w.push_back(fmt::format("tangential acceleration {:.1f} mm/s² exceeds Amax {:.1f} mm/s²",
+                            summary_.max_tangential_accel_mm_s2, machine_.max_accel_mm_s2));
+  }
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    const AxisConfig& a = machine_.axes[i];
+    if (!a.enabled) continue;
+    const char* u = a.rotary ? "deg" : "mm";
+    if (summary_.max_axis_speed_mm_min[i] > a.max_speed_mm_min * 1.001 + 1e-6) {
+      w.push_back(fmt::format("axis {} speed {:.1f} {}/min exceeds its limit {:.1f} {}/min",
+                              kAxisLetters[i], summary_.max_axis_speed_mm_min[i], u,
+                              a.max_speed_mm_min, u));
+    }
+    if (summary_.max_axis_accel_mm_s2[i] > a.max_accel_mm_s2 * 1.01 + 1e-3) {
+      w.push_back(fmt::format("axis {} acceleration {:.1f} {}/s² exceeds its limit {:.1f} {}/s²",
+                              kAxisLetters[i], summary_.max_axis_accel_mm_s2[i], u,
+                              a.max_accel_mm_s2, u));
+    }
+  }
+  if (summary_.max_contour_error_mm > machine_.contour_tolerance_mm * 1.001 + 1e-9) {
+    w.push_back(fmt::format("contour error {:.4f} mm exceeds the tolerance {:.4f} mm",
+                            summary_.max_contour_error_mm, machine_.contour_tolerance_mm));
+  }
+}
+
+std::string summary_to_json(const Summary& s, const MachineConfig& machine) {
+  nlohmann::ordered_json j;
+  j["cycle_time_s"] = s.cycle_time_s;
+  j["blocks"] = s.blocks;
+  j["path_length_mm"] = s.path_length_mm;
+  j["max_feed_mm_min"] = s.max_feed_mm_min;
+  j["max_tangential_accel_mm_s2"] = s.max_tangential_accel_mm_s2;
+  j["max_path_accel_mm_s2"] = s.max_path_accel_mm_s2;
+  nlohmann::ordered_json accel = nlohmann::ordered_json::object();
+  nlohmann::ordered_json speed = nlohmann::ordered_json::object();
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    if (!machine.axes[i].enabled) continue;
+    accel[axis_name(i)] = s.max_axis_accel_mm_s2[i];
+    speed[axis_name(i)] = s.max_axis_speed_mm_min[i];
+  }
+  j["max_axis_accel_mm_s2"] = accel;
+  j["max_axis_speed_mm_min"] = speed;
+  j["max_contour_error_mm"] = s.max_contour_error_mm;
+  j["mode"] = s.mode;
+  j["cycles"] = s.cycles;
+  j["period_s"] = machine.period_s;
+  j["machine"] = machine.name;
+  j["warnings"] = s.warnings;
+  nlohmann::ordered_json spots = nlohmann::ordered_json::array();
+  for (const SlowSpot& p : s.slowest) {
+    nlohmann::ordered_json o;
+    o["line"] = p.line;
+    o["lost_s"] = p.lost_s;
+    o["time_s"] = p.time_s;
+    o["length_mm"] = p.length_mm;
+    o["average_feed_mm_min"] = p.average_feed_mm_min();
+    o["programmed_feed_mm_min"] = p.programmed_feed_mm_min;
+    o["visits"] = p.visits;
+    spots.push_back(o);
+  }
+  j["slowest_spots"] = spots;
+  return j.dump(2) + "\n";
+}
+
+void write_summary_json(const std::string& path, const Summary& summary,
+                        const MachineConfig& machine) {
+  AtomicOutputFile file(path);
+  file.write(summary_to_json(summary, machine));
+  file.commit();
+}
+
+std::string format_human_summary(const Summary& s, const MachineConfig& machine,
+                                 const std::string& program) {
+  std::string o;
+  o += fmt::format("program       {}\n", program);
+  o += fmt::format("machine       {} ({} mode, period {} ms)\n", machine.name, s.mode,
+                   machine.period_s * 1000);
+  o += fmt::format("cycle time    {:.3f} s ({} cycles)\n", s.cycle_time_s, s.cycles);
+  o += fmt::format("path length   {:.3f} mm in {} motion blocks\n", s.path_length_mm, s.blocks);
+  o += fmt::format("max speed     {:.1f} mm/min (machine {:.0f}, rapid {:.0f})\n",
+                   s.max_feed_mm_min, machine.max_feed_mm_min, machine.rapid_mm_min);
+  o += fmt::format("max accel     {:.1f} mm/s² tangential, {:.1f} mm/s² resultant (Amax {:.0f})\n",
+                   s.max_tangential_accel_mm_s2, s.max_path_accel_mm_s2, machine.max_accel_mm_s2);
+  std::string axes;
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    if (!machine.axes[i].enabled) continue;
+    axes += fmt::format("{}{} {:.1f}", axes.empty() ? "" : ", ", kAxisLetters[i],
+                        s.max_axis_accel_mm_s2[i]);
+  }
+  o += fmt::format("axis accel    {} (mm/s² or deg/s²)\n", axes);
+  o += fmt::format("contour error {:.4f} mm (tolerance {} mm)\n", s.max_contour_error_mm,
+                   machine.contour_tolerance_mm);
+  if (s.slowest.empty()) {
+    o += "slowest spots none (the programmed feed is kept everywhere)\n";
+  } else {
+    o += "slowest spots time lost against the programmed feed, worst first:\n";
+    for (const SlowSpot& p : s.slowest) {
+      o += fmt::format("  line {:<6} {:.3f} s lost of {:.3f} s, average {:.0f} mm/min for {:.0f}",
+                       p.line, p.lost_s, p.time_s, p.average_feed_mm_min(),
+                       p.programmed_feed_mm_min);
+      if (p.visits > 1) o += fmt::format(" ({} passes)", p.visits);
+      o += '\n';
+    }
+  }
+  for (const std::string& w : s.warnings) o += fmt::format("warning: {}\n", w);
+  return o;
+}
+
+}  // namespace cncore::io

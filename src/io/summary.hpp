@@ -1,0 +1,97 @@
+// Run summary (spec 05 summary JSON and the human summary of `cncore run`), computed from the
+// samples alone by finite differences: it measures what the servos were told to do and does not
+// rely on the kernel's bookkeeping. Memory is bounded (no per-sample or per-line storage).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <string>
+#include <vector>
+
+#include "config/machine_config.hpp"
+#include "simulation/run.hpp"
+
+namespace cncore::io {
+
+// A program line where the machine ran below its programmed feed. lost_s is the time spent on
+// the line minus the time the same distance takes at the programmed feed (× override):
+// Σ dt·(1 − v/F) over the line's cycles. Lines are ranked by lost_s.
+struct SlowSpot {
+  std::uint32_t line = 0;
+  double lost_s = 0;
+  double time_s = 0;                  // time spent on the line
+  double length_mm = 0;               // distance travelled on the line
+  double programmed_feed_mm_min = 0;  // F × override (rapid rate for G0), last seen
+  std::uint64_t visits = 0;           // separate executions (loops, subroutines)
+  double average_feed_mm_min() const { return time_s > 0 ? length_mm / time_s * 60 : 0; }
+};
+
+struct Summary {
+  double cycle_time_s = 0;                // time of the last sample
+  std::uint64_t blocks = 0;               // motion blocks (G0, G1, G2/G3) executed
+  std::uint64_t cycles = 0;               // samples
+  double path_length_mm = 0;              // Σ |ΔP| of the linear axes' set-points
+  double max_feed_mm_min = 0;             // max |ΔP|/Δt of the linear axes
+  double max_tangential_accel_mm_s2 = 0;  // max |Δ|v||/Δt (change of speed)
+  double max_path_accel_mm_s2 = 0;        // max |Δv|/Δt (resultant, incl. normal at arcs/corners)
+  std::array<double, kMaxAxes> max_axis_speed_mm_min{};
+  std::array<double, kMaxAxes> max_axis_accel_mm_s2{};  // max |Δ²p|/Δt² per axis
+  double max_contour_error_mm = 0;  // servo set-point to programmed path (see summary.cpp)
+  std::string mode;
+  std::vector<std::string> warnings;
+  std::vector<SlowSpot> slowest;  // worst first, at most 5
+};
+
+class SummaryObserver : public sim::SampleObserver {
+ public:
+  SummaryObserver(const MachineConfig& machine, std::string mode);
+
+  void on_block(const Block& block) override;
+  void on_sample(const motion::Sample& sample) override;
+  void on_finish() override;
+
+  const Summary& summary() const { return summary_; }
+
+ private:
+  struct Pending {
+    std::uint32_t line;
+    double feed_mm_min;  // programmed, clamped to the machine's limit
+    double cap_mm_min;   // the limit itself (max feed, or rapid rate for G0)
+  };
+  const Pending* current_block(std::uint32_t line);
+  void close_group();
+  void travel_check(const motion::Sample& s);
+
+  MachineConfig machine_;
+  Summary summary_;
+  // Programmed feed of the blocks handed to the kernel and not yet executed (bounded by the
+  // kernel's buffer capacity).
+  std::deque<Pending> pending_;
+  // Finite-difference state.
+  bool have_prev_ = false, have_vel_ = false;
+  double prev_t_ = 0, prev_dt_ = 0;
+  AxisVec prev_pos_;
+  AxisVec prev_vel_;  // per second
+  double prev_speed_ = 0;
+  // Recent on-path points: the servo set-point lags behind on the path (post-interpolation
+  // filter), so its contour error is the distance to the nearest of these path segments.
+  std::vector<Vec3> path_ring_;
+  std::size_t ring_next_ = 0, ring_size_ = 0;
+  // Current line group (consecutive samples on one line) for the slowest spots.
+  SlowSpot group_;
+  std::vector<SlowSpot> top_;  // bounded candidate set, merged by line
+  std::array<bool, kMaxAxes> travel_warned_{};
+};
+
+// Spec 05 summary JSON (plus extra keys: max_path_accel_mm_s2, max_axis_speed_mm_min,
+// slowest_spots, machine).
+std::string summary_to_json(const Summary& summary, const MachineConfig& machine);
+// Writes the JSON atomically (temporary file + rename).
+void write_summary_json(const std::string& path, const Summary& summary,
+                        const MachineConfig& machine);
+// The human summary printed by `cncore run`.
+std::string format_human_summary(const Summary& summary, const MachineConfig& machine,
+                                 const std::string& program);
+
+}  // namespace cncore::io
