@@ -1,0 +1,286 @@
+// The `cncore` command (spec 05): run, check, machine. CLI11 is included here only.
+// Exit codes: 0 success, 1 the program or another input is wrong (FILE:LINE:COL: error: ...),
+// 2 wrong usage (including bad command-line values), 3 internal failure.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <charconv>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "config/machine_config.hpp"
+#include "core/error.hpp"
+#include "interpreter/interpreter.hpp"
+#include "io/atomic_file.hpp"
+#include "io/summary.hpp"
+#include "io/trajectory_csv.hpp"
+#include "simulation/run.hpp"
+
+namespace {
+
+using namespace cncore;
+
+// A command-line value that is wrong (exit code 2).
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+std::string trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+  return std::string(s);
+}
+
+// The whole text must be a finite number.
+std::optional<double> to_number(std::string_view text) {
+  const std::string s = trim(text);
+  if (s.empty()) return std::nullopt;
+  double v = 0;
+  const char* first = s.data();
+  if (*first == '+') ++first;
+  const auto [end, ec] = std::from_chars(first, s.data() + s.size(), v);
+  if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+double override_value(const std::string& option, std::string_view text, double max_pct) {
+  const auto v = to_number(text);
+  if (!v) throw UsageError(fmt::format("{}: '{}' is not a number", option, text));
+  if (*v < 0 || *v > max_pct) {
+    throw UsageError(fmt::format("{}: override {} % is outside 0 … {} % (machine max_override_pct)",
+                                 option, *v, max_pct));
+  }
+  return *v;
+}
+
+// "T:PCT[,T:PCT…]", possibly given several times.
+std::vector<std::pair<double, double>> parse_override_steps(const std::vector<std::string>& args,
+                                                            double max_pct) {
+  std::vector<std::pair<double, double>> steps;
+  for (const std::string& arg : args) {
+    std::size_t pos = 0;
+    while (pos <= arg.size()) {
+      std::size_t comma = arg.find(',', pos);
+      if (comma == std::string::npos) comma = arg.size();
+      const std::string item = arg.substr(pos, comma - pos);
+      const std::size_t colon = item.find(':');
+      if (colon == std::string::npos) {
+        throw UsageError(fmt::format(
+            "--override-at: '{}' is not TIME:PCT (time in s, feed override in %)", item));
+      }
+      const auto t = to_number(std::string_view(item).substr(0, colon));
+      if (!t || *t < 0) {
+        throw UsageError(
+            fmt::format("--override-at: '{}': the time must be a number >= 0 s", item));
+      }
+      steps.emplace_back(
+          *t, override_value("--override-at", std::string_view(item).substr(colon + 1), max_pct));
+      pos = comma + 1;
+    }
+  }
+  return steps;
+}
+
+std::pair<std::string, double> name_value(const std::string& option, const std::string& arg) {
+  const std::size_t eq = arg.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    throw UsageError(fmt::format("{}: '{}' is not NAME=VALUE", option, arg));
+  }
+  const auto v = to_number(std::string_view(arg).substr(eq + 1));
+  if (!v) throw UsageError(fmt::format("{}: '{}': the value must be a number", option, arg));
+  return {trim(std::string_view(arg).substr(0, eq)), *v};
+}
+
+interp::Options interpreter_options(const std::vector<std::string>& vars,
+                                    const std::vector<std::string>& params) {
+  interp::Options o;
+  for (const std::string& a : vars) {
+    auto [name, value] = name_value("--var", a);
+    for (const char c : name) {
+      if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) {
+        throw UsageError(fmt::format("--var: '{}': a name has letters, digits and _ only", a));
+      }
+    }
+    o.named_params[name] = value;
+  }
+  for (const std::string& a : params) {
+    auto [name, value] = name_value("--param", a);
+    int n = 0;
+    const auto [end, ec] = std::from_chars(name.data(), name.data() + name.size(), n);
+    if (ec != std::errc() || end != name.data() + name.size() || n < 1) {
+      throw UsageError(
+          fmt::format("--param: '{}': the parameter number must be an integer >= 1", a));
+    }
+    o.params[n] = value;
+  }
+  return o;
+}
+
+MachineConfig machine_from(const std::string& path) {
+  return path.empty() ? default_machine_config() : load_machine_config(path);
+}
+
+void require_readable(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, 0, "cannot open");
+}
+
+struct RunArgs {
+  std::string program, machine, trajectory, summary, mode = "lookahead";
+  std::optional<double> override_pct;
+  std::vector<std::string> override_at, vars, params;
+};
+
+int command_run(const RunArgs& a) {
+  const MachineConfig machine = machine_from(a.machine);
+  sim::RunOptions options;
+  options.kernel.mode = a.mode == "stop" ? motion::Mode::kStop : motion::Mode::kLookahead;
+  if (a.override_pct) {
+    options.kernel.override_pct =
+        override_value("--override", fmt::format("{}", *a.override_pct), machine.max_override_pct);
+  }
+  options.override_steps = parse_override_steps(a.override_at, machine.max_override_pct);
+  options.interpreter = interpreter_options(a.vars, a.params);
+  require_readable(a.program);
+
+  // Output files are created (as temporaries) before the run, so a bad path fails at once, and
+  // renamed into place only after the run succeeded.
+  std::optional<io::TrajectoryCsvWriter> csv;
+  if (!a.trajectory.empty()) {
+    io::TrajectoryColumns cols;
+    cols.override_pct = a.override_pct.has_value() || !options.override_steps.empty();
+    csv.emplace(a.trajectory, machine, cols);
+  }
+  std::optional<io::AtomicOutputFile> json;
+  if (!a.summary.empty()) json.emplace(a.summary);
+
+  io::SummaryObserver summary(machine, a.mode);
+  std::vector<sim::SampleObserver*> observers{&summary};
+  if (csv) observers.push_back(&*csv);
+  sim::run_program(a.program, machine, options, observers);
+
+  if (json) json->write(io::summary_to_json(summary.summary(), machine));
+  if (csv) csv->commit();
+  if (json) json->commit();
+  std::cout << io::format_human_summary(summary.summary(), machine, a.program);
+  if (csv) std::cout << "trajectory    " << a.trajectory << "\n";
+  if (json) std::cout << "summary       " << a.summary << "\n";
+  return 0;
+}
+
+struct CheckArgs {
+  std::string program, machine;
+  bool blocks = false;
+  std::vector<std::string> vars, params;
+};
+
+int command_check(const CheckArgs& a) {
+  const MachineConfig machine = machine_from(a.machine);
+  const interp::Options options = interpreter_options(a.vars, a.params);
+  require_readable(a.program);
+  interp::Interpreter interpreter(a.program, machine, options);
+  Block b;
+  std::uint64_t blocks = 0, motion = 0;
+  std::string out;
+  while (interpreter.next(b)) {
+    ++blocks;
+    if (b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc) {
+      ++motion;
+    }
+    if (a.blocks) {
+      out += interp::format_block(b);
+      out += '\n';
+      if (out.size() > (1 << 16)) {
+        std::fwrite(out.data(), 1, out.size(), stdout);
+        out.clear();
+      }
+    }
+  }
+  if (!a.blocks) out = fmt::format("{}: ok, {} blocks ({} motion)\n", a.program, blocks, motion);
+  std::fwrite(out.data(), 1, out.size(), stdout);
+  std::fflush(stdout);
+  return 0;
+}
+
+int main_cli(int argc, char** argv) {
+  CLI::App app{
+      "cncore: a CNC numerical-control kernel on a simulated machine.\n"
+      "G-code -> look-ahead feed planning -> per-cycle interpolation -> axis set-points."};
+  app.set_version_flag("--version", std::string("cncore ") + CNCORE_VERSION);
+  app.require_subcommand(1);
+
+  RunArgs ra;
+  CLI::App* run = app.add_subcommand(
+      "run", "Interpret, plan and interpolate a program; print a summary of the motion.");
+  run->add_option("PROGRAM", ra.program, "Part program (G-code)")->required();
+  run->add_option("--machine", ra.machine, "Machine configuration (TOML); default: built-in");
+  run->add_option("--trajectory", ra.trajectory, "Write one CSV row per interpolation cycle");
+  run->add_option("--summary", ra.summary, "Write the machine-readable summary (JSON)");
+  run->add_option("--mode", ra.mode, "lookahead (default) or stop (stop at every block)")
+      ->check(CLI::IsMember({"lookahead", "stop"}));
+  run->add_option("--override", ra.override_pct, "Constant feed override, %");
+  run->add_option("--override-at", ra.override_at,
+                  "Override steps TIME:PCT[,TIME:PCT...] (time in s, override in %)")
+      ->allow_extra_args(false);
+  run->add_option("--var", ra.vars, "Named parameter #<NAME> = VALUE (NAME=VALUE, repeatable)")
+      ->allow_extra_args(false);
+  run->add_option("--param", ra.params, "Numbered parameter #N = VALUE (N=VALUE, repeatable)")
+      ->allow_extra_args(false);
+
+  CheckArgs ca;
+  CLI::App* check =
+      app.add_subcommand("check", "Interpret a program only and report the first error.");
+  check->add_option("PROGRAM", ca.program, "Part program (G-code)")->required();
+  check->add_flag("--blocks", ca.blocks, "List the interpreted blocks, one per line");
+  check->add_option("--machine", ca.machine, "Machine configuration (TOML); default: built-in");
+  check->add_option("--var", ca.vars, "Named parameter #<NAME> = VALUE (NAME=VALUE, repeatable)")
+      ->allow_extra_args(false);
+  check->add_option("--param", ca.params, "Numbered parameter #N = VALUE (N=VALUE, repeatable)")
+      ->allow_extra_args(false);
+
+  std::string machine_path;
+  CLI::App* machine = app.add_subcommand(
+      "machine", "Print the machine configuration as TOML (built-in, or the effective one).");
+  machine->add_option("--machine", machine_path,
+                      "Print this configuration file with every default filled in");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  if (*run) return command_run(ra);
+  if (*check) return command_check(ca);
+  if (*machine) {
+    std::cout << machine_config_to_toml(machine_from(machine_path));
+    return 0;
+  }
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return main_cli(argc, argv);
+  } catch (const InputError& e) {
+    std::fflush(stdout);
+    std::cerr << e.formatted() << "\n";
+    return 1;
+  } catch (const UsageError& e) {
+    std::cerr << "cncore: error: " << e.what() << "\nRun with --help for more information.\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "cncore: internal error: " << e.what() << "\n";
+    return 3;
+  } catch (...) {
+    std::cerr << "cncore: internal error: unknown exception\n";
+    return 3;
+  }
+}

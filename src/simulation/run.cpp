@@ -1,0 +1,86 @@
+#include "simulation/run.hpp"
+
+#include <algorithm>
+#include <exception>
+#include <stdexcept>
+
+#include "core/error.hpp"
+
+namespace cncore::sim {
+
+namespace {
+
+bool is_motion(const Block& b) {
+  return b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc;
+}
+
+}  // namespace
+
+RunCounts run_program(const std::string& program_path, const MachineConfig& machine,
+                      const RunOptions& options, std::vector<SampleObserver*> observers) {
+  interp::Interpreter interpreter(program_path, machine, options.interpreter);
+  motion::Kernel kernel(machine, options.kernel);
+  RunCounts counts;
+  motion::Sample sample;
+  std::size_t next_step = 0;  // next override step to apply (steps sorted by time)
+  std::vector<std::pair<double, double>> steps = options.override_steps;
+  std::stable_sort(steps.begin(), steps.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+
+  auto deliver = [&](const motion::Sample& s) {
+    ++counts.cycles;
+    for (SampleObserver* o : observers) o->on_sample(s);
+  };
+  // One interpolation period. The k-th sample (k = 0, 1, ...) has t = k·τ; an override step at
+  // time T is set before the first cycle with t >= T, since set_override acts on the next cycle.
+  auto step = [&]() -> bool {
+    const double t_next = static_cast<double>(counts.cycles) * machine.period_s;
+    while (next_step < steps.size() && t_next >= steps[next_step].first - 1e-9) {
+      kernel.set_override(steps[next_step].second);
+      ++next_step;
+    }
+    if (!kernel.step(sample)) return false;
+    deliver(sample);
+    return true;
+  };
+
+  bool more = true;  // the interpreter may still produce blocks
+  Block block;
+  while (true) {
+    // Stream: read blocks only while the execution-data buffer has room, so memory stays
+    // bounded by the buffer whatever the program length.
+    while (more && kernel.wants_block()) {
+      bool got = false;
+      try {
+        got = interpreter.next(block);
+      } catch (const InputError&) {
+        // Stop at the end of the last good block: the samples up to there are delivered, then
+        // the error goes on to the caller (which discards its output files).
+        const std::exception_ptr error = std::current_exception();
+        kernel.end_of_program();
+        while (step()) {
+        }
+        std::rethrow_exception(error);
+      }
+      if (!got) {
+        more = false;
+        kernel.end_of_program();
+        break;
+      }
+      if (is_motion(block)) ++counts.blocks;
+      for (SampleObserver* o : observers) o->on_block(block);
+      kernel.push(block);
+    }
+    if (!step()) {
+      if (more) {
+        // The kernel contract: step() returns false only after end_of_program().
+        throw std::logic_error("motion kernel stopped before the end of the program");
+      }
+      break;
+    }
+  }
+  for (SampleObserver* o : observers) o->on_finish();
+  return counts;
+}
+
+}  // namespace cncore::sim
