@@ -1,0 +1,297 @@
+// End-to-end tests of the built `cncore` binary: exit codes, error format, outputs written only
+// on success (no file and no temporary after an error), trajectory from t = 0 to the programmed
+// end point.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "config/machine_config.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void write(const fs::path& p, const std::string& text) {
+  std::ofstream f(p, std::ios::binary);
+  f << text;
+}
+
+std::vector<std::string> list_dir(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (const char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::path(CNCORE_TEST_TMP_DIR) / "work" / info->name();
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+
+  // Runs cncore with the arguments (already shell-quoted where needed) in the test directory.
+  Result run(const std::string& args) const {
+    const std::string cmd = "cd " + quote(dir_.string()) + " && " + quote(CNCORE_BIN) + " " + args +
+                            " >" + quote((dir_ / ".stdout").string()) + " 2>" +
+                            quote((dir_ / ".stderr").string());
+    const int status = std::system(cmd.c_str());
+    Result r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(dir_ / ".stdout");
+    r.err = slurp(dir_ / ".stderr");
+    fs::remove(dir_ / ".stdout");
+    fs::remove(dir_ / ".stderr");
+    return r;
+  }
+
+  static std::string example(const std::string& name) {
+    return quote(std::string(CNCORE_SOURCE_DIR) + "/examples/" + name);
+  }
+
+  fs::path dir_;
+};
+
+// CSV rows as maps column → value.
+std::vector<std::map<std::string, double>> read_csv(const fs::path& p,
+                                                    std::vector<std::string>* header = nullptr) {
+  std::ifstream in(p);
+  std::string line;
+  std::vector<std::string> names;
+  std::vector<std::map<std::string, double>> rows;
+  auto cells = [](const std::string& l) {
+    std::vector<std::string> c;
+    std::stringstream ss(l);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) c.push_back(cell);
+    return c;
+  };
+  if (!std::getline(in, line)) return rows;
+  names = cells(line);
+  if (header) *header = names;
+  while (std::getline(in, line)) {
+    const auto c = cells(line);
+    std::map<std::string, double> row;
+    for (std::size_t i = 0; i < c.size() && i < names.size(); ++i) {
+      row[names[i]] = c[i].empty() ? std::nan("") : std::stod(c[i]);
+    }
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+TEST_F(Cli, VersionAndHelpOnEveryCommand) {
+  const Result v = run("--version");
+  EXPECT_EQ(v.code, 0);
+  EXPECT_NE(v.out.find(CNCORE_VERSION), std::string::npos) << v.out;
+  for (const char* args : {"--help", "run --help", "check --help", "machine --help"}) {
+    const Result h = run(args);
+    EXPECT_EQ(h.code, 0) << args;
+    EXPECT_NE(h.out.find("Usage"), std::string::npos) << args << "\n" << h.out;
+  }
+  EXPECT_NE(run("run --help").out.find("--override-at"), std::string::npos);
+  EXPECT_NE(run("check --help").out.find("--blocks"), std::string::npos);
+}
+
+TEST_F(Cli, UsageErrorsExitTwo) {
+  write(dir_ / "p.ngc", "G1 X1 F100\nM30\n");
+  for (const char* args :
+       {"", "frobnicate", "run", "run p.ngc --no-such-option", "run p.ngc --mode fast",
+        "run p.ngc --override abc", "run p.ngc --override 500", "run p.ngc --override -1",
+        "run p.ngc --override-at abc", "run p.ngc --override-at 1:50,x:20",
+        "run p.ngc --override-at 0.5:900", "run p.ngc --override-at -1:50", "run p.ngc --var depth",
+        "run p.ngc --var depth=deep", "run p.ngc --param x=1", "run p.ngc --param 0=1", "check",
+        "machine extra"}) {
+    const Result r = run(args);
+    EXPECT_EQ(r.code, 2) << "cncore " << args << "\n" << r.err;
+    EXPECT_FALSE(r.err.empty()) << args;
+  }
+  // The message names the option.
+  EXPECT_NE(run("run p.ngc --override-at abc").err.find("--override-at"), std::string::npos);
+  EXPECT_EQ(list_dir(dir_), std::vector<std::string>{"p.ngc"});
+}
+
+TEST_F(Cli, MachinePrintsTheBuiltInAsParsableToml) {
+  const Result r = run("machine");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(cncore::parse_machine_config(r.out, "stdout"), cncore::default_machine_config());
+  EXPECT_NE(r.out.find("period_s = 0.001"), std::string::npos);
+  // An edited copy prints as the effective configuration.
+  write(dir_ / "m.toml", "[motion]\nmax_feed_mm_min = 5000\n");
+  const Result e = run("machine --machine m.toml");
+  ASSERT_EQ(e.code, 0) << e.err;
+  cncore::MachineConfig expected = cncore::default_machine_config();
+  expected.max_feed_mm_min = 5000;
+  EXPECT_EQ(cncore::parse_machine_config(e.out, "stdout"), expected);
+}
+
+TEST_F(Cli, BadConfigIsExitOneWithFileLineColumnAndKey) {
+  write(dir_ / "m.toml", "[motion]\nperiod_s = 0.001\nmax_accel_mm_s2 = 0\n");
+  write(dir_ / "p.ngc", "G1 X1 F100\nM30\n");
+  const Result m = run("machine --machine m.toml");
+  EXPECT_EQ(m.code, 1);
+  EXPECT_EQ(m.err.rfind("m.toml:3:1: error: ", 0), 0u) << m.err;
+  EXPECT_NE(m.err.find("motion.max_accel_mm_s2"), std::string::npos) << m.err;
+  const Result r = run("run p.ngc --machine m.toml --trajectory t.csv --summary s.json");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.err.rfind("m.toml:3:1: error: ", 0), 0u) << r.err;
+  write(dir_ / "syntax.toml", "[motion]\nperiod_s = = 1\n");
+  const Result s = run("machine --machine syntax.toml");
+  EXPECT_EQ(s.code, 1);
+  EXPECT_EQ(s.err.rfind("syntax.toml:2:12: error: ", 0), 0u) << s.err;
+  EXPECT_EQ(list_dir(dir_), (std::vector<std::string>{"m.toml", "p.ngc", "syntax.toml"}));
+}
+
+TEST_F(Cli, MissingProgramIsExitOneCannotOpen) {
+  const Result r = run("run nofile.ngc --trajectory t.csv --summary s.json");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_EQ(r.err, "nofile.ngc:0:0: error: cannot open\n");
+  const Result c = run("check nofile.ngc");
+  EXPECT_EQ(c.code, 1);
+  EXPECT_EQ(c.err, "nofile.ngc:0:0: error: cannot open\n");
+  EXPECT_TRUE(list_dir(dir_).empty());
+}
+
+TEST_F(Cli, BadProgramIsExitOneWithFileLineColumn) {
+  // Two words of the motion modal group in one block (line 3).
+  write(dir_ / "bad.ngc", "G21 G90\nG1 X10 F1000\nG0 G1 X20\nM30\n");
+  for (const char* cmd : {"check bad.ngc", "run bad.ngc"}) {
+    const Result r = run(cmd);
+    EXPECT_EQ(r.code, 1) << cmd << "\n" << r.err;
+    EXPECT_EQ(r.err.rfind("bad.ngc:3:", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find(": error: "), std::string::npos) << r.err;
+  }
+}
+
+TEST_F(Cli, ErrorAtTheLastLineLeavesNoOutputAndNoTemporary) {
+  std::string program = "G21 G90 G17\nG1 X10 F3000\n";
+  for (int i = 0; i < 200; ++i) program += i % 2 ? "G1 X10\n" : "G1 X20\n";
+  program += "G2 X30 Y10\n";  // arc without centre or radius: an error at the last line
+  write(dir_ / "late.ngc", program);
+  const Result r = run("run late.ngc --trajectory t.csv --summary s.json");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_EQ(r.err.rfind("late.ngc:203:", 0), 0u) << r.err;
+  EXPECT_EQ(list_dir(dir_), std::vector<std::string>{"late.ngc"});
+}
+
+TEST_F(Cli, UnwritableOutputIsExitOneAndLeavesNothing) {
+  const Result r =
+      run("run " + example("seed-line-arc-line.ngc") + " --trajectory no/such/dir/t.csv");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_EQ(r.err.rfind("no/such/dir/t.csv:0:0: error: ", 0), 0u) << r.err;
+  EXPECT_TRUE(list_dir(dir_).empty());
+}
+
+TEST_F(Cli, CheckListsTheBlocks) {
+  const Result r = run("check --blocks " + example("seed-line-arc-line.ngc"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto lines = std::count(r.out.begin(), r.out.end(), '\n');
+  EXPECT_GE(lines, 3);  // line, arc, line (+ the M30 event if listed)
+  const Result plain = run("check " + example("seed-line-arc-line.ngc"));
+  EXPECT_EQ(plain.code, 0);
+  EXPECT_NE(plain.out.find("ok"), std::string::npos);
+}
+
+TEST_F(Cli, RunWritesTrajectoryFromStartToProgrammedEnd) {
+  const Result r =
+      run("run " + example("seed-line-arc-line.ngc") + " --trajectory t.csv --summary s.json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("cycle time"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("slowest spots"), std::string::npos) << r.out;
+  EXPECT_EQ(list_dir(dir_), (std::vector<std::string>{"s.json", "t.csv"}));
+
+  std::vector<std::string> header;
+  const auto rows = read_csv(dir_ / "t.csv", &header);
+  for (const char* col : {"t", "line", "x", "y", "z", "feed"}) {
+    EXPECT_NE(std::find(header.begin(), header.end(), col), header.end()) << col;
+  }
+  EXPECT_EQ(std::find(header.begin(), header.end(), "override"), header.end());
+  ASSERT_GE(rows.size(), 2u);
+  EXPECT_EQ(rows.front().at("t"), 0.0);
+  EXPECT_EQ(rows.front().at("x"), 0.0);  // the built-in start position
+  EXPECT_EQ(rows.front().at("y"), 0.0);
+  // The program ends at X55 Y60 (Z untouched): printed with 6 decimals.
+  EXPECT_NEAR(rows.back().at("x"), 55.0, 1e-6);
+  EXPECT_NEAR(rows.back().at("y"), 60.0, 1e-6);
+  EXPECT_NEAR(rows.back().at("z"), 0.0, 1e-6);
+  // Uniform time steps of the period.
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    ASSERT_NEAR(rows[i].at("t") - rows[i - 1].at("t"), 0.001, 1e-6) << "row " << i;
+  }
+
+  const auto j = nlohmann::json::parse(slurp(dir_ / "s.json"));
+  EXPECT_EQ(j.at("cycles").get<std::size_t>(), rows.size());
+  EXPECT_NEAR(j.at("cycle_time_s").get<double>(), rows.back().at("t"), 1e-6);
+  EXPECT_EQ(j.at("blocks").get<int>(), 3);
+  EXPECT_EQ(j.at("mode"), "lookahead");
+  // Path length: 50 + quarter circle of R5 + 55 = 112.854 mm.
+  EXPECT_NEAR(j.at("path_length_mm").get<double>(), 105 + 2.5 * M_PI, 0.01);
+  EXPECT_LE(j.at("max_feed_mm_min").get<double>(), 8000 * 1.001);
+  EXPECT_TRUE(j.at("max_axis_accel_mm_s2").contains("x"));
+}
+
+TEST_F(Cli, StopModeIsSlowerThanLookahead) {
+  const Result a = run("run " + example("seed-line-arc-line.ngc") + " --summary a.json");
+  const Result b =
+      run("run " + example("seed-line-arc-line.ngc") + " --mode stop --summary b.json");
+  ASSERT_EQ(a.code, 0) << a.err;
+  ASSERT_EQ(b.code, 0) << b.err;
+  const auto ja = nlohmann::json::parse(slurp(dir_ / "a.json"));
+  const auto jb = nlohmann::json::parse(slurp(dir_ / "b.json"));
+  EXPECT_EQ(jb.at("mode"), "stop");
+  EXPECT_GT(jb.at("cycle_time_s").get<double>(), ja.at("cycle_time_s").get<double>());
+}
+
+TEST_F(Cli, OverrideColumnFollowsTheSteps) {
+  const Result r = run("run " + example("seed-line-arc-line.ngc") +
+                       " --override-at 0:100,0.2:50 --trajectory t.csv");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = read_csv(dir_ / "t.csv");
+  ASSERT_GT(rows.size(), 300u);
+  for (const auto& row : rows) {
+    if (row.at("t") < 0.2 - 1e-9) {
+      ASSERT_NEAR(row.at("override"), 100, 1e-9) << "t = " << row.at("t");
+    } else if (row.at("t") > 0.2 + 1e-9) {
+      ASSERT_NEAR(row.at("override"), 50, 1e-9) << "t = " << row.at("t");
+    }
+  }
+}
+
+TEST_F(Cli, BundledExamplesRun) {
+  for (const char* name : {"pocket-with-arcs.ngc", "inch-bracket.ngc", "cam-short-segments.ngc"}) {
+    const Result r = run("run " + example(name));
+    EXPECT_EQ(r.code, 0) << name << "\n" << r.err;
+    EXPECT_NE(r.out.find("cycle time"), std::string::npos) << name;
+  }
+}
+
+}  // namespace
