@@ -1,0 +1,348 @@
+#include "trajectory_checker.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+namespace cncore::testing {
+
+const char* property_name(Property p) {
+  switch (p) {
+    case Property::kPath:
+      return "P1 path";
+    case Property::kSpeed:
+      return "P2 speed";
+    case Property::kJointSpeed:
+      return "P2 joint speed";
+    case Property::kAxisSpeed:
+      return "P2 axis speed";
+    case Property::kTangentialAccel:
+      return "P3 tangential accel";
+    case Property::kNormalAccel:
+      return "P3 normal accel";
+    case Property::kAxisAccel:
+      return "P3 axis accel";
+    case Property::kResultantAccel:
+      return "P3 resultant accel";
+    case Property::kJerk:
+      return "P3 jerk";
+    case Property::kEndPoint:
+      return "P4 end point";
+    case Property::kEndSpeed:
+      return "P4 speed at stop";
+    case Property::kStopPoint:
+      return "P4 stop point";
+    case Property::kCount:
+      break;
+  }
+  return "?";
+}
+
+std::string Violation::to_string() const {
+  std::ostringstream o;
+  o.precision(6);
+  o << property_name(property) << ": sample " << index << " t=" << t_s << " s line " << line;
+  if (axis >= 0) o << " axis " << kAxisLetters[static_cast<std::size_t>(axis)];
+  o << ": " << value << " > " << limit;
+  return o.str();
+}
+
+std::string CheckReport::summary() const {
+  std::ostringstream o;
+  o.precision(6);
+  o << samples << " samples, " << duration_s << " s, path " << path_length_mm
+    << " mm; max: path error " << max_path_error_mm << " mm, speed " << max_speed_mm_s << " mm/s ("
+    << max_speed_ratio << " of limit), tangential " << max_tangential_accel_mm_s2 << ", normal "
+    << max_normal_accel_mm_s2 << ", resultant " << max_resultant_accel_mm_s2
+    << " mm/s2, tangential jerk " << max_tangential_jerk_mm_s3 << " mm/s3; end error "
+    << end_error_mm << " mm, end speed " << end_speed_mm_s << " mm/s\n";
+  for (std::size_t p = 0; p < counts.size(); ++p) {
+    if (counts[p] == 0) continue;
+    o << "  " << property_name(static_cast<Property>(p)) << ": " << counts[p] << " violations\n";
+    int shown = 0;
+    for (const auto& v : violations) {
+      if (static_cast<std::size_t>(v.property) != p) continue;
+      o << "    " << v.to_string() << "\n";
+      if (++shown == 5) break;
+    }
+  }
+  return o.str();
+}
+
+CheckReport check_trajectory(const Trajectory& tr, const std::vector<Block>& blocks,
+                             const Limits& limits) {
+  return check_trajectory(tr, build_path(blocks), limits);
+}
+
+namespace {
+
+struct Projection {
+  std::size_t seg = 0;
+  double u = 0;
+  double s = 0;     // XYZ path length from the start
+  double dist = 0;  // distance to the path, all axes
+};
+
+double dist_axes(const AxisVec& a, const AxisVec& b) {
+  double s = 0;
+  for (std::size_t i = 0; i < kMaxAxes; ++i) s += (a[i] - b[i]) * (a[i] - b[i]);
+  return std::sqrt(s);
+}
+
+}  // namespace
+
+CheckReport check_trajectory(const Trajectory& tr, const Path& path, const Limits& lim) {
+  CheckReport rep;
+  const std::size_t n = tr.size();
+  rep.samples = n;
+  rep.path_length_mm = path.length_mm;
+  if (n == 0) return rep;
+  rep.duration_s = tr.t_s.back() - tr.t_s.front();
+  const double tau = lim.period_s > 0 ? lim.period_s : tr.period_s;
+  const double m1 = 1 + lim.margin;
+  const double q = lim.position_resolution_mm;
+  const double eps_v = 2 * q / tau;
+  const double eps_a = 4 * q / (tau * tau);
+  const double eps_j = 8 * q / (tau * tau * tau);
+  const double amax = lim.max_accel_mm_s2;
+  const auto& segs = path.segments;
+  const std::size_t nseg = segs.size();
+
+  auto line_of = [&](std::size_t k, std::size_t seg) -> std::uint32_t {
+    if (k < tr.line.size() && tr.line[k] != 0) return tr.line[k];
+    return nseg > 0 ? segs[std::min(seg, nseg - 1)].line : 0;
+  };
+  std::vector<Projection> proj(n);
+  auto add = [&](Property p, std::size_t k, double value, double limit, int axis = -1) {
+    auto& c = rep.counts[static_cast<std::size_t>(p)];
+    if (c < CheckReport::kMaxStoredPerProperty) {
+      rep.violations.push_back({p, k, k < n ? tr.t_s[k] : 0.0,
+                                line_of(k, proj[std::min(k, n - 1)].seg), value, limit, axis});
+    }
+    ++c;
+  };
+
+  // ---- Projection of every sample onto the path, walking forward only. ----
+  const double snap = std::max(1e-7, 100 * q);
+  const double on_path = std::max(1e-6, 10 * q);
+  const double vcap_mm_s = std::max(lim.max_feed_mm_min, lim.rapid_mm_min) / 60.0 *
+                           std::max(1.0, lim.max_override_pct / 100.0);
+  constexpr std::size_t kMaxScan = 200000;
+  if (nseg > 0) {
+    std::size_t cur = 0;
+    double cur_u = 0;
+    double cur_s = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const AxisVec& p = tr.pos[k];
+      const double chord = k > 0 ? dist_axes(p, tr.pos[k - 1]) : 0.0;
+      const double reach = 4 * chord + 2 * vcap_mm_s * tau + 10 * lim.path_tolerance_mm + 1e-6;
+      Projection best{cur, cur_u, cur_s, std::numeric_limits<double>::infinity()};
+      bool hit = false;
+      std::size_t j = cur;
+      for (std::size_t scanned = 0; j < nseg && scanned < kMaxScan; ++j, ++scanned) {
+        if (j > cur && segs[j].s0_mm - cur_s > reach) break;
+        double d = 0;
+        const double u = segs[j].project(p, j == cur ? cur_u : 0.0, d);
+        if (d < best.dist) best = {j, u, segs[j].s0_mm + u * segs[j].length_mm, d};
+        if (d <= snap) {
+          hit = true;
+          break;
+        }
+      }
+      if (hit) {
+        // A later segment may be nearer still (e.g. right at a joint): look a little further.
+        const double s_hit = best.s;
+        const double horizon = s_hit + 2 * best.dist + 1e-12;
+        for (std::size_t j2 = j + 1; j2 < nseg && j2 < j + 64 && segs[j2].s0_mm <= horizon; ++j2) {
+          double d = 0;
+          const double u = segs[j2].project(p, 0.0, d);
+          if (d < best.dist) best = {j2, u, segs[j2].s0_mm + u * segs[j2].length_mm, d};
+        }
+      } else {
+        // Off the path (violation, or the post-interpolation filter): also allow a small step
+        // back on the current segment so the distance is the true nearest one.
+        const PathSegment& cs = segs[cur];
+        const double back = 2 * lim.path_tolerance_mm + chord;
+        const double len6 = std::max(dist_axes(cs.end, cs.start), cs.length_mm);
+        const double umin = len6 > 0 ? std::max(0.0, cur_u - back / len6) : cur_u;
+        double d = 0;
+        const double u = cs.project(p, umin, d);
+        if (d < best.dist) best = {cur, u, cs.s0_mm + u * cs.length_mm, d};
+      }
+      proj[k] = best;
+      cur = best.seg;
+      cur_u = best.u;
+      cur_s = best.s;
+    }
+  }
+
+  // ---- Path speed per cycle. ----
+  std::vector<double> v(n, 0.0);
+  std::vector<Vec3> d(n);  // XYZ chords
+  for (std::size_t k = 1; k < n; ++k) {
+    d[k] = tr.pos[k].xyz() - tr.pos[k - 1].xyz();
+    const bool along = nseg > 0 && proj[k].dist <= on_path && proj[k - 1].dist <= on_path;
+    v[k] = along ? std::max(0.0, proj[k].s - proj[k - 1].s) / tau : norm(d[k]) / tau;
+  }
+
+  // ---- P1 ----
+  if (nseg > 0) {
+    for (std::size_t k = 0; k < n; ++k) {
+      rep.max_path_error_mm = std::max(rep.max_path_error_mm, proj[k].dist);
+      if (proj[k].dist > lim.path_tolerance_mm * m1 + q)
+        add(Property::kPath, k, proj[k].dist, lim.path_tolerance_mm);
+    }
+  }
+
+  // ---- P2 path speed, with the override ramp allowance. ----
+  // f_eff[k] = max over samples with t ≥ t[k] − ramp of override·correction (monotone deque).
+  const double ramp = lim.ramp_s();
+  std::vector<double> f_eff(n, 1.0);
+  {
+    std::deque<std::size_t> dq;
+    auto f_at = [&](std::size_t k) {
+      const double o = k < tr.override_pct.size() ? tr.override_pct[k] : 100.0;
+      const double c = k < tr.correction.size() ? tr.correction[k] : 1.0;
+      return o / 100.0 * c;
+    };
+    std::size_t lo = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      while (!dq.empty() && f_at(dq.back()) <= f_at(k)) dq.pop_back();
+      dq.push_back(k);
+      while (lo < k && tr.t_s[lo] < tr.t_s[k] - ramp - 1e-12) ++lo;
+      while (dq.front() < lo) dq.pop_front();
+      f_eff[k] = f_at(dq.front());
+    }
+  }
+  auto shape_limit = [&](const PathSegment& sg) {
+    double vb = sg.rapid ? lim.rapid_mm_s() : lim.feed_mm_s();
+    if (sg.arc) vb = std::min(vb, std::sqrt(sg.radius_mm() * amax));
+    return vb;
+  };
+  for (std::size_t k = 1; k < n; ++k) {
+    rep.max_speed_mm_s = std::max(rep.max_speed_mm_s, v[k]);
+    if (nseg == 0) continue;
+    const PathSegment& sg = segs[proj[k].seg];
+    double limit = shape_limit(sg);
+    if (sg.rapid) {
+      if (lim.override_applies_to_rapid)
+        limit = std::min(limit, lim.rapid_mm_s() * std::min(1.0, f_eff[k]));
+    } else {
+      const double f_mm_s = sg.feed_mm_min > 0 ? sg.feed_mm_min / 60.0 : lim.feed_mm_s();
+      limit = std::min(limit, f_mm_s * f_eff[k]);
+    }
+    if (limit > 0) rep.max_speed_ratio = std::max(rep.max_speed_ratio, v[k] / limit);
+    if (v[k] > limit * m1 + eps_v) add(Property::kSpeed, k, v[k], limit);
+  }
+
+  // ---- P2 at joints, P4 at stop points and the end. ----
+  if (nseg > 0) {
+    std::size_t k = 0;
+    for (std::size_t j = 0; j < nseg; ++j) {
+      // First sample at or past the end of segment j.
+      auto reached = [&](std::size_t kk) {
+        return proj[kk].seg > j || (proj[kk].seg == j && proj[kk].u >= 1 - 1e-9) ||
+               dist_axes(tr.pos[kk], segs[j].end) <= snap;
+      };
+      while (k < n && !reached(k)) ++k;
+      JointSpeed js;
+      js.segment = j;
+      js.stop = segs[j].stop_after;
+      js.line = j + 1 < nseg ? segs[j + 1].line : segs[j].line;
+      if (j + 1 < nseg) {
+        const double theta = corner_angle_rad(segs[j], segs[j + 1]);
+        js.angle_deg = theta * 180 / std::numbers::pi;
+        double vg = std::min(shape_limit(segs[j]), shape_limit(segs[j + 1]));
+        if (theta > 1e-12) vg = std::min(vg, amax * tau / (2 * std::sin(theta / 2)));
+        js.vg_mm_s = vg;
+      }
+      if (js.stop) js.vg_mm_s = amax * tau;
+      if (k >= n) {
+        rep.joints.push_back(js);
+        continue;
+      }
+      js.speed_mm_s = k > 0 ? v[k] : 0.0;
+      if (js.stop) {
+        const bool last = j + 1 == nseg;
+        const double tol = last ? lim.end_tolerance_mm : lim.stop_tolerance_mm;
+        const double err = dist_axes(tr.pos[k], segs[j].end);
+        if (err > tol + q) {
+          add(Property::kStopPoint, k, err, tol);  // jumped over the stop point
+        } else {
+          if (js.speed_mm_s > js.vg_mm_s * m1 + eps_v)
+            add(Property::kEndSpeed, k, js.speed_mm_s, js.vg_mm_s);
+          if (segs[j].dwell_after_s > 0) {
+            std::size_t e = k;
+            while (e + 1 < n && dist_axes(tr.pos[e + 1], segs[j].end) <= tol + q) ++e;
+            const double stayed = tr.t_s[e] - tr.t_s[k];
+            if (stayed < segs[j].dwell_after_s - tau - 1e-9)
+              add(Property::kStopPoint, k, stayed, segs[j].dwell_after_s);
+          }
+        }
+      } else if (js.speed_mm_s > js.vg_mm_s * m1 + eps_v) {
+        add(Property::kJointSpeed, k, js.speed_mm_s, js.vg_mm_s);
+      }
+      rep.joints.push_back(js);
+    }
+    rep.end_error_mm = dist_axes(tr.pos.back(), path.end);
+    rep.end_speed_mm_s = v[n - 1];
+    if (rep.end_error_mm > lim.end_tolerance_mm + q)
+      add(Property::kEndPoint, n - 1, rep.end_error_mm, lim.end_tolerance_mm);
+    const bool end_checked = !rep.joints.empty() && rep.joints.back().speed_mm_s >= 0;
+    if (!end_checked && rep.end_speed_mm_s > amax * tau * m1 + eps_v)
+      add(Property::kEndSpeed, n - 1, rep.end_speed_mm_s, amax * tau);
+  }
+
+  // ---- P2 per axis, P3. ----
+  std::vector<double> at(n, 0.0);  // tangential acceleration at sample k
+  for (std::size_t k = 1; k < n; ++k) {
+    for (std::size_t i = 0; i < kMaxAxes; ++i) {
+      const double va = std::abs(tr.pos[k][i] - tr.pos[k - 1][i]) / tau;
+      rep.max_axis_speed_mm_s[i] = std::max(rep.max_axis_speed_mm_s[i], va);
+      const double lv = lim.axis_speed_mm_min[i] / 60.0;
+      if (lv > 0 && va > lv * m1 + eps_v) add(Property::kAxisSpeed, k, va, lv, static_cast<int>(i));
+    }
+    if (k + 1 >= n) continue;
+    const double a_t = (v[k + 1] - v[k]) / tau;
+    at[k] = a_t;
+    rep.max_tangential_accel_mm_s2 = std::max(rep.max_tangential_accel_mm_s2, std::abs(a_t));
+    if (std::abs(a_t) > amax * m1 + eps_a) add(Property::kTangentialAccel, k, std::abs(a_t), amax);
+    const Vec3 d1 = d[k], d2 = d[k + 1];
+    const double l1 = norm(d1), l2 = norm(d2);
+    double a_n = 0;
+    if (l1 > 0 && l2 > 0) {
+      // 2·√(l1·l2)·sin(θ/2) = √(l1·l2)·|d̂2 − d̂1|
+      a_n = std::sqrt(l1 * l2) * norm((1.0 / l2) * d2 - (1.0 / l1) * d1) / (tau * tau);
+    }
+    rep.max_normal_accel_mm_s2 = std::max(rep.max_normal_accel_mm_s2, a_n);
+    if (a_n > amax * m1 + eps_a) add(Property::kNormalAccel, k, a_n, amax);
+    const double a_r = norm(d2 - d1) / (tau * tau);
+    rep.max_resultant_accel_mm_s2 = std::max(rep.max_resultant_accel_mm_s2, a_r);
+    if (lim.max_resultant_accel_mm_s2 > 0 && a_r > lim.max_resultant_accel_mm_s2 * m1 + eps_a)
+      add(Property::kResultantAccel, k, a_r, lim.max_resultant_accel_mm_s2);
+    for (std::size_t i = 0; i < kMaxAxes; ++i) {
+      const double aa =
+          std::abs(tr.pos[k + 1][i] - 2 * tr.pos[k][i] + tr.pos[k - 1][i]) / (tau * tau);
+      rep.max_axis_accel_mm_s2[i] = std::max(rep.max_axis_accel_mm_s2[i], aa);
+      const double la = lim.axis_accel_mm_s2[i];
+      if (la > 0 && aa > la * m1 + eps_a) add(Property::kAxisAccel, k, aa, la, static_cast<int>(i));
+    }
+  }
+  for (std::size_t k = 1; k + 2 < n; ++k) {
+    const double jt = std::abs(at[k + 1] - at[k]) / tau;
+    rep.max_tangential_jerk_mm_s3 = std::max(rep.max_tangential_jerk_mm_s3, jt);
+    if (lim.check_jerk && lim.max_jerk_mm_s3 > 0 && jt > lim.max_jerk_mm_s3 * m1 + eps_j)
+      add(Property::kJerk, k, jt, lim.max_jerk_mm_s3);
+    const Vec3 j3 = tr.pos[k + 2].xyz() - 3.0 * tr.pos[k + 1].xyz() + 3.0 * tr.pos[k].xyz() -
+                    tr.pos[k - 1].xyz();
+    rep.max_resultant_jerk_mm_s3 =
+        std::max(rep.max_resultant_jerk_mm_s3, norm(j3) / (tau * tau * tau));
+  }
+  rep.speed_mm_s = std::move(v);
+  return rep;
+}
+
+}  // namespace cncore::testing
