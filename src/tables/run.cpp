@@ -1,0 +1,200 @@
+// The distribution (the seed's section 12): once per interpolation period, the reference value
+// from the source → each table's segment → axis positions. Rows are read lazily (LINEAR: when
+// the segment that ends at the row starts; CUBIC: one row earlier, because the tangent at a
+// segment's end needs the next point), so signals changed during the run apply to the rows
+// read after the change. Per cycle the work is bounded and nothing is allocated once the
+// sample's M-code list has reached its largest size.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+#include "tables/analysis.hpp"
+
+namespace cncore::tables {
+namespace {
+
+class Cursor {
+ public:
+  Cursor(const Table& t, const TablePlan& plan, double start_ref)
+      : t_(&t),
+        values_(&plan.options.values),
+        cubic_(t.interp == Interp::kCubic),
+        an_(t, plan.options.settings.cancel_mode, start_ref, plan.start_position,
+            t.cyclic ? (t.cyclic_repeats ? t.cyclic_repeats : plan.options.cyclic_repeats) : 1) {}
+
+  // Reads the first points at t = 0; the start point's M codes fire in the first cycle.
+  void start(std::uint8_t index, std::vector<MEvent>& events) {
+    index_ = index;
+    an_.next(*values_, 0.0, p0_);  // plan_tables has already read this table once
+    fire(p0_, events);
+    has_p1_ = an_.next(*values_, 0.0, p1_);
+    if (cubic_ && has_p1_) has_p2_ = an_.next(*values_, 0.0, p2_);
+    m0_ = AxisVec{};  // the table starts at rest
+    m1_ = tangents_at_p1();
+    done_ = !has_p1_;
+  }
+
+  // Passes every control point the reference has reached (reading further rows at t_s).
+  void advance(double ref, double t_s, std::vector<MEvent>& events) {
+    while (!done_ && ref >= p1_.ref - 1e-9 * std::max(1.0, std::abs(p1_.ref))) {
+      fire(p1_, events);
+      p0_ = p1_;
+      m0_ = m1_;
+      if (cubic_) {
+        has_p1_ = has_p2_;
+        if (has_p1_) {
+          p1_ = p2_;
+          has_p2_ = an_.next(*values_, t_s, p2_);
+        }
+      } else {
+        has_p1_ = an_.next(*values_, t_s, p1_);
+      }
+      if (has_p1_) m1_ = tangents_at_p1();
+      done_ = !has_p1_;
+    }
+  }
+
+  // Positions of this table's axes at `ref`.
+  void evaluate(double ref, AxisVec& pos) const {
+    for (std::size_t a = 0; a < kMaxAxes; ++a) {
+      if (!((t_->axis_mask >> a) & 1U)) continue;
+      if (done_) {
+        pos[a] = p0_.position[a];
+        continue;
+      }
+      double h = p1_.ref - p0_.ref;
+      double u = std::clamp((ref - p0_.ref) / h, 0.0, 1.0);
+      if (cubic_) {
+        pos[a] = detail::hermite(p0_.position[a], p1_.position[a], m0_[a], m1_[a], h, u);
+      } else {
+        // The seed: movement per reference unit = Δcoordinate / Δreference.
+        pos[a] = p0_.position[a] + (p1_.position[a] - p0_.position[a]) * u;
+      }
+    }
+  }
+
+  bool done() const { return done_; }
+  std::uint32_t active_line() const {
+    const EffectivePoint& p = done_ ? p0_ : p1_;
+    return p.row < 0 ? 0 : t_->rows[static_cast<std::size_t>(p.row)].line;
+  }
+  double end_ref() const { return done_ ? p0_.ref : p1_.ref; }
+
+ private:
+  AxisVec tangents_at_p1() const {
+    AxisVec m;
+    if (!cubic_ || !has_p2_) return m;  // LINEAR, or the last point: the table ends at rest
+    for (std::size_t a = 0; a < kMaxAxes; ++a) {
+      if ((t_->axis_mask >> a) & 1U) {
+        m[a] = detail::pchip_tangent(p0_.ref, p0_.position[a], p1_.ref, p1_.position[a], p2_.ref,
+                                     p2_.position[a]);
+      }
+    }
+    return m;
+  }
+  void fire(const EffectivePoint& p, std::vector<MEvent>& events) const {
+    for (std::int32_t r : {p.row, p.extra_row}) {
+      if (r < 0) continue;
+      const Row& row = t_->rows[static_cast<std::size_t>(r)];
+      for (int code : row.m_codes) events.push_back({index_, row.line, code});
+    }
+  }
+
+  const Table* t_;
+  const Values* values_;
+  bool cubic_;
+  detail::Analyzer an_;
+  std::uint8_t index_ = 0;
+  EffectivePoint p0_, p1_, p2_;
+  bool has_p1_ = false, has_p2_ = false;
+  AxisVec m0_, m1_;  // tangents (per reference unit) at p0 and p1
+  bool done_ = false;
+};
+
+}  // namespace
+
+RunSummary run_tables(const TablePlan& plan,
+                      const std::function<void(const TableSample&)>& on_sample) {
+  for (const Diagnostic& d : plan.diagnostics) {
+    if (d.severity == Diagnostic::Severity::kError) {
+      throw InputError(d.file, d.line, d.col, d.message);
+    }
+  }
+  const ReferenceSource& src = plan.options.reference;
+  const double period_s = plan.machine.period_s;
+  // slow_to_fit runs the reference at rate / slow_factor.
+  const double ref_per_cycle = src.rate_per_s / plan.slow_factor * period_s;
+  const bool master = plan.tables.front().ref_kind == RefKind::kAxis;
+  const std::size_t master_axis = plan.tables.front().ref_axis;
+
+  double ref = src.position ? src.position(0.0) : src.start;
+  const double start_ref = ref;
+  std::vector<Cursor> cursors;
+  cursors.reserve(plan.tables.size());
+  TableSample s;
+  s.m_codes.reserve(16);
+  for (std::size_t i = 0; i < plan.tables.size(); ++i) {
+    cursors.emplace_back(plan.tables[i], plan, start_ref);
+    cursors.back().start(static_cast<std::uint8_t>(i), s.m_codes);
+  }
+
+  RunSummary sum;
+  AxisVec prev = plan.start_position;
+  for (std::uint64_t k = 0;; ++k) {
+    const double t_s = static_cast<double>(k) * period_s;
+    if (k > 0) {
+      s.m_codes.clear();
+      // Forward-only reference: a master moving back holds the table where it is.
+      ref = src.position ? std::max(ref, src.position(t_s))
+                         : start_ref + static_cast<double>(k) * ref_per_cycle;
+    }
+    s.t_s = t_s;
+    s.ref = ref;
+    s.position = plan.start_position;
+    if (master) s.position[master_axis] = src.position ? src.position(t_s) : ref;
+    bool all_done = true;
+    for (std::size_t i = 0; i < cursors.size(); ++i) {
+      cursors[i].advance(ref, t_s, s.m_codes);
+      cursors[i].evaluate(ref, s.position);
+      s.lines[i] = cursors[i].active_line();
+      all_done = all_done && cursors[i].done();
+    }
+    s.line = s.lines[0];
+    // Path speed of the linear axes over the last cycle (|Δxyz| / τ, mm/min).
+    Vec3 d = s.position.xyz() - prev.xyz();
+    s.feed_mm_min = k == 0 ? 0 : norm(d) / period_s * 60.0;
+    prev = s.position;
+    on_sample(s);
+    ++sum.cycles;
+    sum.duration_s = t_s;
+    sum.end_ref = ref;
+    if (all_done) break;
+    if (t_s >= plan.options.max_time_s) {
+      sum.finished = false;
+      sum.warnings.push_back(fmt::format(
+          "stopped at t = {:.6g} s (max_time_s) before the tables ended: the reference stood at "
+          "{:.6g}, the next control point is at {:.6g}",
+          t_s, ref, cursors.front().end_ref()));
+      break;
+    }
+  }
+  return sum;
+}
+
+motion::Sample to_motion_sample(const TableSample& sample) {
+  motion::Sample m;
+  m.t_s = sample.t_s;
+  m.line = sample.line;
+  m.position = sample.position;
+  m.path_position = sample.position;
+  m.feed_mm_min = sample.feed_mm_min;
+  if (!sample.m_codes.empty()) {
+    m.aux_letter = 'M';
+    m.aux_value = sample.m_codes.front().code;
+  }
+  return m;
+}
+
+}  // namespace cncore::tables

@@ -1,0 +1,117 @@
+// Per-axis limits checked before running, with the rows responsible; slow_to_fit.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "core/error.hpp"
+#include "helpers.hpp"
+
+namespace cncore::tables::test {
+namespace {
+
+using Sev = Diagnostic::Severity;
+
+std::vector<Diagnostic> of(const TablePlan& p, Sev sev) {
+  std::vector<Diagnostic> out;
+  for (const auto& d : p.diagnostics) {
+    if (d.severity == sev) out.push_back(d);
+  }
+  return out;
+}
+
+// Row 5 (L1500 X200) asks for 100 mm in 500 ms = 12 000 mm/min > 10 000 mm/min.
+const char* kTooFast = "REF TIME\nAXES X\nCUBIC\nL0 X0\nL1000 X100\n   L1500 X200\nL3000 X200\n";
+const char* kTooFastLinear = "REF TIME\nAXES X\nL1000 X100\n   L1500 X200\nL3000 X200\n";
+
+TEST(Limits, SpeedViolationNamesTheRowAndRefusesTheRun) {
+  std::vector<Table> t{parse_table(kTooFastLinear, "fast.tbl")};
+  TablePlan plan = plan_tables(t, test_machine(), {});
+  auto errors = of(plan, Sev::kError);
+  ASSERT_EQ(errors.size(), 1U);
+  EXPECT_EQ(errors[0].file, "fast.tbl");
+  EXPECT_EQ(errors[0].line, 4U);
+  EXPECT_EQ(errors[0].col, 4U);
+  EXPECT_NE(errors[0].message.find("X speed 12000 mm/min"), std::string::npos) << errors[0].message;
+  EXPECT_NE(errors[0].formatted().find("fast.tbl:4:4: error: "), std::string::npos);
+  EXPECT_TRUE(plan.has_errors());
+  bool called = false;
+  try {
+    run_tables(plan, [&](const TableSample&) { called = true; });
+    FAIL() << "run_tables accepted a plan with errors";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 4U);
+  }
+  EXPECT_FALSE(called);
+}
+
+TEST(Limits, LinearVelocityStepsAreWarningsAtTheirRows) {
+  // 100 mm/s appears in one 1 ms cycle at L0 (line 3) and vanishes at L1000 (line 4):
+  // 100 000 mm/s² > 2 000 mm/s².
+  std::vector<Table> t{parse_table("REF TIME\nAXES X\nL0 X0\nL1000 X100\nL2000 X100\n", "s.tbl")};
+  TablePlan plan = plan_tables(t, test_machine(), {});
+  EXPECT_FALSE(plan.has_errors());
+  auto w = of(plan, Sev::kWarning);
+  ASSERT_EQ(w.size(), 2U);  // the start of the move (line 3) and its end (line 4)
+  EXPECT_EQ(w[0].line, 3U);
+  EXPECT_EQ(w[1].line, 4U);
+  EXPECT_NE(w[0].message.find("100000 mm/s²"), std::string::npos) << w[0].message;
+}
+
+TEST(Limits, CubicAccelerationViolationIsAnError) {
+  // 0 → 10 mm in 100 ms, smooth: peak acceleration 6·10/0.1² = 6000 mm/s² (zero end tangents).
+  std::vector<Table> t{parse_table("REF TIME\nAXES Z\nCUBIC\nL0 Z0\nL100 Z10\n", "a.tbl")};
+  TablePlan plan = plan_tables(t, test_machine(), {});
+  auto errors = of(plan, Sev::kError);
+  ASSERT_EQ(errors.size(), 1U);
+  EXPECT_EQ(errors[0].line, 5U);
+  EXPECT_NE(errors[0].message.find("Z acceleration 6000 mm/s²"), std::string::npos)
+      << errors[0].message;
+}
+
+TEST(Limits, SlowToFitRunsTheReferenceSlowerAndStaysWithinLimits) {
+  RunOptions o;
+  o.settings.slow_to_fit = true;
+  TableRun r = run_texts({kTooFast}, o);
+  // The cubic segment L1000→L1500 needs the largest factor; after slowing, the measured speed
+  // and acceleration stay within the limits.
+  EXPECT_GT(r.plan.slow_factor, 1.2);
+  EXPECT_FALSE(r.plan.has_errors());
+  double vmax = 0, amax = 0;
+  for (std::size_t i = 2; i < r.samples.size(); ++i) {
+    double v1 = fd_velocity(r.samples, kX, i), v0 = fd_velocity(r.samples, kX, i - 1);
+    vmax = std::max(vmax, std::abs(v1));
+    amax = std::max(amax, std::abs(v1 - v0) / 0.001);
+  }
+  EXPECT_LE(vmax * 60, 10000 * 1.001);
+  EXPECT_LE(amax, 2000 * 1.01);
+  EXPECT_GT(vmax * 60, 10000 * 0.95);  // …and is not slowed more than needed
+  // The whole cycle takes slow_factor times as long (3000 ms at full rate).
+  EXPECT_NEAR(r.samples.back().t_s, 3.0 * r.plan.slow_factor, 0.0011);
+  // The violations stay visible as warnings naming the rows.
+  auto w = of(r.plan, Sev::kWarning);
+  EXPECT_TRUE(std::any_of(w.begin(), w.end(), [](auto& d) { return d.line == 6; }));
+}
+
+TEST(Limits, TravelViolationIsAnErrorEvenWithSlowToFit) {
+  RunOptions o;
+  o.settings.slow_to_fit = true;
+  std::vector<Table> t{parse_table("REF TIME\nAXES X\nL1000 X100\nL5000 X1200\n", "tr.tbl")};
+  TablePlan plan = plan_tables(t, test_machine(), o);
+  auto errors = of(plan, Sev::kError);
+  ASSERT_EQ(errors.size(), 1U);
+  EXPECT_EQ(errors[0].line, 4U);
+  EXPECT_NE(errors[0].message.find("travel"), std::string::npos);
+}
+
+TEST(Limits, MasterAxisTooFast) {
+  RunOptions o;
+  o.reference = ReferenceSource::master_axis(0, 20000);
+  std::vector<Table> t{parse_table("REF AXIS Y\nAXES X\nL0 X0\nL50 X1\n", "m.tbl")};
+  TablePlan plan = plan_tables(t, test_machine(), o);
+  auto errors = of(plan, Sev::kError);
+  ASSERT_EQ(errors.size(), 1U);
+  EXPECT_EQ(errors[0].line, 1U);
+}
+
+}  // namespace
+}  // namespace cncore::tables::test
