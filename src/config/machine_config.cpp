@@ -336,11 +336,18 @@ std::string machine_config_to_toml(const MachineConfig& c) {
   line("rapid_mm_min = " + num(c.rapid_mm_min), "G0 path speed, mm/min");
   line("max_accel_mm_s2 = " + num(c.max_accel_mm_s2),
        "Amax: tangential and normal path acceleration, mm/s²");
-  o += "# The moving-average acc/dec filter follows from the limits: its time constant is\n"
-       "# T = Vmax / Amax (s), i.e. ceil(Vmax / (Amax·τ)) cycles, so a step 0 → Vmax becomes a\n"
-       "# ramp of slope Amax. With the defaults: (10000/60) / 2000 = 83.3 ms = 84 cycles.\n"
-       "# Arcs pass at Vb = min(Vmax, sqrt(R·Amax)); a corner of angle θ at\n"
-       "# Amax·τ / (2·sin(θ/2)).\n";
+  // Written from this configuration's own values, so an edited file documents itself.
+  const double t_feed_s = c.max_feed_mm_min / 60 / c.max_accel_mm_s2;
+  const double t_rapid_s = c.rapid_mm_min / 60 / c.max_accel_mm_s2;
+  o += fmt::format(
+      "# The moving-average acc/dec filter follows from the limits: its time constant is\n"
+      "# T = Vmax / Amax (s), i.e. ceil(Vmax / (Amax·τ)) cycles, so a step 0 → Vmax becomes a\n"
+      "# ramp of slope Amax. Here: feed T = {:.1f} ms ({} cycles), rapid T = {:.1f} ms ({} "
+      "cycles).\n"
+      "# Arcs of radius R pass at Vb = min(Vmax, sqrt(R·Amax)); a corner turning by θ at\n"
+      "# Amax·τ / (2·sin(θ/2)).\n",
+      t_feed_s * 1000, static_cast<long>(std::ceil(t_feed_s / c.period_s - 1e-9)), t_rapid_s * 1000,
+      static_cast<long>(std::ceil(t_rapid_s / c.period_s - 1e-9)));
   line("max_jerk_mm_s3 = " + num(c.max_jerk_mm_s3),
        "Jmax, mm/s³; 0 = no jerk stage, else a second filter T2 = Amax / Jmax");
   line("contour_tolerance_mm = " + num(c.contour_tolerance_mm),
