@@ -2,9 +2,11 @@
 // Exit codes: 0 success, 1 the program or another input is wrong (FILE:LINE:COL: error: ...),
 // 2 wrong usage (including bad command-line values), 3 internal failure.
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <charconv>
+#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -131,6 +133,37 @@ void require_readable(const std::string& path) {
   if (!in) throw InputError(path, 0, 0, "cannot open");
 }
 
+// A one-line progress display on stderr (spec 05): only when stderr is a terminal, and only once
+// the run has taken more than a second. Checks the clock every 4096 cycles.
+class ProgressObserver : public sim::SampleObserver {
+ public:
+  ProgressObserver() : enabled_(::isatty(STDERR_FILENO) == 1), start_(Clock::now()) {}
+  ~ProgressObserver() override { clear(); }
+  void on_sample(const motion::Sample& s) override {
+    if (!enabled_ || (++cycles_ & 4095) != 0) return;
+    const double wall_s = std::chrono::duration<double>(Clock::now() - start_).count();
+    if (wall_s < 1.0) return;
+    std::fprintf(stderr, "\rcncore: simulated %.1f s, line %u, %.0f cycles/s   ", s.t_s, s.line,
+                 static_cast<double>(cycles_) / wall_s);
+    std::fflush(stderr);
+    shown_ = true;
+  }
+  void on_finish() override { clear(); }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  void clear() {
+    if (!shown_) return;
+    std::fprintf(stderr, "\r%60s\r", "");
+    std::fflush(stderr);
+    shown_ = false;
+  }
+  bool enabled_;
+  bool shown_ = false;
+  std::uint64_t cycles_ = 0;
+  Clock::time_point start_;
+};
+
 struct RunArgs {
   std::string program, machine, trajectory, summary, mode = "lookahead";
   std::optional<double> override_pct;
@@ -161,7 +194,8 @@ int command_run(const RunArgs& a) {
   if (!a.summary.empty()) json.emplace(a.summary);
 
   io::SummaryObserver summary(machine, a.mode);
-  std::vector<sim::SampleObserver*> observers{&summary};
+  ProgressObserver progress;
+  std::vector<sim::SampleObserver*> observers{&summary, &progress};
   if (csv) observers.push_back(&*csv);
   sim::run_program(a.program, machine, options, observers);
 

@@ -41,7 +41,7 @@ SummaryObserver::SummaryObserver(const MachineConfig& machine, std::string mode)
   // corners on its own.
   const double window_s = std::max(machine.post_filter_s, 0.02);
   const double cycles = std::ceil(window_s / machine.period_s) + 2;
-  path_ring_.resize(static_cast<std::size_t>(std::min(cycles, 4096.0)));
+  path_ring_.resize(static_cast<std::size_t>(std::min(cycles, 512.0)));
   top_.reserve(kSlowCandidates);
 }
 
