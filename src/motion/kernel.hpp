@@ -21,6 +21,12 @@ enum class Mode : std::uint8_t {
 struct KernelOptions {
   Mode mode = Mode::kLookahead;
   double override_pct = 100;  // initial feed override
+  // Arcs: bound the resultant of tangential and normal acceleration by Amax (true) or each of
+  // them separately (false, the seed's way: the resultant may reach √2·Amax).
+  bool bound_resultant_accel = false;
+  // Tests: every cycle, also compute the look-ahead limit by a plain walk over the buffer and
+  // count the cycles where it differs (reference_mismatches()). O(n) per cycle.
+  bool check_reference_walk = false;
 };
 
 // One interpolation cycle.
@@ -64,6 +70,10 @@ class Kernel {
   void set_override(double pct);
   // Feed hold: decelerate along the path to a stop and wait; false resumes.
   void set_feed_hold(bool hold);
+
+  // Diagnostics (tests, benchmarks).
+  std::uint64_t reference_mismatches() const;  // see KernelOptions::check_reference_walk
+  double filter_time_s() const;                // (T + T2 − 1)·τ: span of the acc/dec filter
 
  private:
   struct Impl;

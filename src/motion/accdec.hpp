@@ -1,0 +1,43 @@
+// The acc/dec type: the part of the motion cycle that turns the programmed feed, the passing
+// speeds of the buffer and the override into the tool's position along the path, one cycle at a
+// time. The buffer, the geometry and the shape interpolation do not depend on it, so a second
+// type (issue 9: constant-acceleration planning before interpolation) plugs in behind this
+// interface without touching them.
+#pragma once
+
+#include <cstdint>
+
+#include "planner/segment.hpp"
+
+namespace cncore::motion {
+
+struct CycleInput {
+  double or_ratio = 1;  // feed override (1 = 100 %)
+  bool hold = false;    // feed hold: come to a stop on the path
+  // The commanded position may not pass this (mm): the buffer's last end point while its
+  // successor has not arrived, the end of the program, or the next dwell / waiting event.
+  double stop_mm = 0;
+};
+
+class AccDec {
+ public:
+  virtual ~AccDec() = default;
+
+  // The successor b of motion item a (buffer index index_a) arrived: the joint is known.
+  virtual void on_joint(std::uint64_t index_a, const planner::Segment& a,
+                        const planner::Segment& b) = 0;
+  // Whether the acc/dec still needs buffer item `index` (the interpolator has passed it).
+  virtual bool holds(std::uint64_t index) const = 0;
+  // The buffer drops item `index`.
+  virtual void on_retire(std::uint64_t index) = 0;
+
+  // One interpolation cycle. Real-time: no allocation, no I/O, bounded work.
+  virtual void step(const CycleInput& in) = 0;
+
+  virtual double tool_mm() const = 0;        // the tool's path position (filtered)
+  virtual double tool_speed_pc() const = 0;  // its step this cycle (mm/cycle)
+  virtual double commanded_mm() const = 0;   // the commanded (pre-filter) path position
+  virtual bool at_rest() const = 0;          // no motion left in the acc/dec
+};
+
+}  // namespace cncore::motion

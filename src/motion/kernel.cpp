@@ -1,0 +1,283 @@
+// The motion kernel: execution-data buffer → acc/dec (look-ahead + moving average) → shape
+// interpolation (carrying the remainder across blocks) → events → post-interpolation per-axis
+// moving average → Sample.
+#include "motion/kernel.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "motion/moving_average.hpp"
+#include "planner/buffer.hpp"
+#include "planner/segment.hpp"
+
+namespace cncore::motion {
+
+using planner::ItemKind;
+using planner::Segment;
+
+struct Kernel::Impl {
+  Impl(const MachineConfig& m, const KernelOptions& o)
+      : machine(m),
+        options(o),
+        lim(planner::make_limits(m, o.bound_resultant_accel)),
+        // Two items per block at most (an exact-stop block adds its stop event).
+        buf(std::max<std::size_t>(4, static_cast<std::size_t>(m.lookahead_blocks) + 1)),
+        acc(buf, lim, o.mode, m.max_override_pct / 100.0, o.check_reference_walk),
+        barriers(buf.capacity()),
+        post_ring(lim.post_filter() ? lim.post_cycles : 1) {
+    for (std::size_t i = 0; i < kMaxAxes; ++i) last_end[i] = m.start_position[i];
+    position = last_end;
+    path_position = last_end;
+    for (auto& p : post_ring) p = last_end;
+    post_sum = static_cast<double>(post_ring.size()) * last_end;
+    set_override(o.override_pct);
+  }
+
+  void set_override(double pct) {
+    override_pct = std::clamp(std::isfinite(pct) ? pct : 0.0, 0.0, machine.max_override_pct);
+  }
+
+  bool wants_block() const { return buf.size() + 2 <= buf.capacity(); }
+
+  void push_event(const Segment& ev) {
+    const std::uint64_t idx = buf.push(ev);
+    if (ev.barrier) {
+      barriers[(bq_head + bq_size) % barriers.size()] = idx;
+      ++bq_size;
+      barrier_since_motion = true;
+    }
+  }
+
+  void push(const Block& b) {
+    Segment ev;
+    ev.start = last_end;
+    ev.end = last_end;
+    ev.s0_mm = total_mm;
+    ev.line = b.line;
+    switch (b.kind) {
+      case BlockKind::kDwell:
+        ev.kind = ItemKind::kDwell;
+        ev.barrier = true;
+        ev.dwell_cycles =
+            static_cast<std::uint32_t>(std::lround(std::max(0.0, b.dwell_s) / lim.period_s));
+        push_event(ev);
+        return;
+      case BlockKind::kAux:
+        ev.kind = ItemKind::kAux;
+        ev.barrier = b.aux_waits;
+        ev.aux_letter = b.aux_letter;
+        ev.aux_value = b.aux_value;
+        push_event(ev);
+        return;
+      default:
+        break;
+    }
+    Segment seg = planner::make_motion_segment(b, lim);
+    if (seg.length_mm > 0) {
+      seg.s0_mm = total_mm;
+      const std::uint64_t idx = buf.push(seg);
+      if (have_motion && !barrier_since_motion && last_motion >= buf.begin_index()) {
+        acc.on_joint(last_motion, buf[last_motion], buf[idx]);
+      }
+      have_motion = true;
+      barrier_since_motion = false;
+      last_motion = idx;
+      // The end of this block, as a sum of lengths: the tail stop and every later s0 use it.
+      total_mm = seg.end_mm();
+      last_end = seg.end;
+    }
+    if (b.path_mode == PathMode::kExactStop) {
+      // Exact stop: speed 0 and settled at the end of the block (an event with no action).
+      Segment stop;
+      stop.kind = ItemKind::kDwell;
+      stop.barrier = true;
+      stop.start = last_end;
+      stop.end = last_end;
+      stop.s0_mm = total_mm;
+      stop.line = b.line;
+      push_event(stop);
+    }
+  }
+
+  double stop_mm() const {
+    double s = total_mm;  // the buffer's last end point (a stop until its successor comes)
+    if (bq_size > 0) s = std::min(s, buf[barriers[bq_head]].s0_mm);
+    return s;
+  }
+
+  bool post_settled() const { return !lim.post_filter() || post_still >= lim.post_cycles; }
+
+  bool all_done() const {
+    if (!ended || bq_size > 0 || !acc.at_rest() || !post_settled()) return false;
+    if (buf.empty()) return true;
+    if (out_idx + 1 < buf.end_index()) return false;
+    const Segment& last = buf[out_idx];
+    return last.kind == ItemKind::kMotion ? acc.tool_mm() >= last.end_mm() : last.done;
+  }
+
+  // Moves the output cursor to the item under the tool, handling events on the way. Each item
+  // is passed once: amortised O(1) per block.
+  void advance_output(double tool, Sample& out) {
+    while (out_idx < buf.end_index()) {
+      Segment& it = buf[out_idx];
+      const bool has_next = out_idx + 1 < buf.end_index();
+      if (it.kind == ItemKind::kMotion) {
+        if (tool >= it.end_mm() && has_next) {
+          ++out_idx;
+          continue;
+        }
+        return;
+      }
+      if (!it.done) {
+        if (tool < it.s0_mm) return;
+        if (it.barrier && (!acc.at_rest() || !post_settled())) return;
+        if (it.kind == ItemKind::kDwell) {
+          if (!dwelling) {
+            dwelling = true;
+            dwell_left = it.dwell_cycles;
+          }
+          if (dwell_left > 0) {
+            --dwell_left;
+            return;
+          }
+          dwelling = false;
+        } else {
+          if (out.aux_letter != 0) return;  // one event per sample; the next one next cycle
+          out.aux_letter = it.aux_letter;
+          out.aux_value = it.aux_value;
+        }
+        it.done = true;
+        if (it.barrier) {
+          bq_head = (bq_head + 1) % barriers.size();
+          --bq_size;
+        }
+      }
+      if (!has_next) return;
+      ++out_idx;
+    }
+  }
+
+  AxisVec interpolate(double tool) const {
+    if (buf.empty() || out_idx >= buf.end_index()) return last_end;
+    const Segment& it = buf[out_idx];
+    if (it.kind != ItemKind::kMotion) return it.end;
+    return it.point_at(tool - it.s0_mm);
+  }
+
+  void retire() {
+    while (buf.begin_index() < out_idx) {
+      const std::uint64_t i = buf.begin_index();
+      if (buf[i].kind == ItemKind::kMotion && acc.holds(i)) break;
+      acc.on_retire(i);
+      buf.pop_front();
+    }
+  }
+
+  void post_filter(const AxisVec& p) {
+    if (!lim.post_filter()) {
+      position = p;
+      return;
+    }
+    // Per-axis moving average over Tp cycles (running sum; exact once the path stood still
+    // for Tp cycles).
+    post_still =
+        (p == post_ring[(post_pos + post_ring.size() - 1) % post_ring.size()]) ? post_still + 1 : 0;
+    post_sum = post_sum + (p - post_ring[post_pos]);
+    post_ring[post_pos] = p;
+    post_pos = (post_pos + 1) % post_ring.size();
+    position = post_still >= lim.post_cycles
+                   ? p
+                   : (1.0 / static_cast<double>(post_ring.size())) * post_sum;
+  }
+
+  void fill(Sample& out, double speed_pc) const {
+    out.t_s = static_cast<double>(cycle) * lim.period_s;
+    out.line = (buf.empty() || out_idx >= buf.end_index()) ? 0 : buf[out_idx].line;
+    out.position = position;
+    out.path_position = path_position;
+    out.feed_mm_min = speed_pc / lim.period_s * 60.0;
+    out.override_pct = override_pct;
+  }
+
+  bool step(Sample& out) {
+    if (!started) {
+      started = true;
+      out = Sample{};
+      fill(out, 0);
+      return true;
+    }
+    if (all_done()) return false;
+    ++cycle;
+    CycleInput in;
+    in.or_ratio = override_pct / 100.0;
+    in.hold = hold;
+    in.stop_mm = stop_mm();
+    acc.step(in);
+    out = Sample{};
+    const double tool = acc.tool_mm();
+    advance_output(tool, out);
+    path_position = interpolate(tool);
+    post_filter(path_position);
+    retire();
+    fill(out, acc.tool_speed_pc());
+    return true;
+  }
+
+  MachineConfig machine;
+  KernelOptions options;
+  planner::Limits lim;
+  planner::SegmentBuffer buf;
+  MovingAverageAccDec acc;
+
+  AxisVec last_end;     // end of the last pushed motion
+  double total_mm = 0;  // its path position
+  bool have_motion = false;
+  bool barrier_since_motion = false;
+  std::uint64_t last_motion = 0;
+  std::vector<std::uint64_t> barriers;  // unprocessed stop events, in order (fixed ring)
+  std::size_t bq_head = 0, bq_size = 0;
+
+  bool ended = false, started = false, hold = false;
+  double override_pct = 100;
+  std::uint64_t cycle = 0;
+  std::uint64_t out_idx = 0;
+  bool dwelling = false;
+  std::uint32_t dwell_left = 0;
+
+  AxisVec path_position, position;
+  std::vector<AxisVec> post_ring;
+  std::size_t post_pos = 0;
+  AxisVec post_sum;
+  std::uint32_t post_still = UINT32_MAX / 2;  // settled at start
+};
+
+Kernel::Kernel(const MachineConfig& machine, const KernelOptions& options)
+    : impl_(std::make_unique<Impl>(machine, options)) {}
+Kernel::~Kernel() = default;
+bool Kernel::wants_block() const {
+  return impl_->wants_block();
+}
+void Kernel::push(const Block& block) {
+  impl_->push(block);
+}
+void Kernel::end_of_program() {
+  impl_->ended = true;
+}
+bool Kernel::step(Sample& out) {
+  return impl_->step(out);
+}
+void Kernel::set_override(double pct) {
+  impl_->set_override(pct);
+}
+void Kernel::set_feed_hold(bool hold) {
+  impl_->hold = hold;
+}
+std::uint64_t Kernel::reference_mismatches() const {
+  return impl_->acc.reference_mismatches();
+}
+double Kernel::filter_time_s() const {
+  return impl_->lim.span_cycles() * impl_->lim.period_s;
+}
+
+}  // namespace cncore::motion

@@ -1,0 +1,103 @@
+#include "motion/moving_average.hpp"
+
+#include <algorithm>
+#include <limits>
+
+namespace cncore::motion {
+
+using planner::CapPoint;
+using planner::ItemKind;
+using planner::Segment;
+
+MovingAverageAccDec::MovingAverageAccDec(const planner::SegmentBuffer& buffer,
+                                         const planner::Limits& limits, Mode mode, double or_max,
+                                         bool check_reference_walk)
+    : buf_(buffer),
+      lim_(limits),
+      mode_(mode),
+      or_max_(or_max),
+      check_(check_reference_walk),
+      la_(2 * buffer.capacity(), or_max),
+      stage1_(limits.t_cycles),
+      stage2_(limits.t2_cycles) {}
+
+void MovingAverageAccDec::on_joint(std::uint64_t index_a, const Segment& a, const Segment& b) {
+  if (mode_ != Mode::kLookahead) return;
+  const std::size_t slot = buf_.slot(index_a);
+  const double post = lim_.post_filter() ? lim_.post_cycles : 0.0;
+  const double span = lim_.span_cycles() + post;
+  const double c = a.end_mm();
+  // Geometric cap Vg (corner, arc, axis limits, contour tolerance): OR-independent.
+  const double vg = planner::joint_speed_pc(a, b, lim_);
+  la_.insert(2 * slot, CapPoint{c, vg, false, span, c + vg * post}, cmd_mm_);
+  // Feed cap: where the programmed feed changes, the lower of the two feeds holds from the
+  // range start until the tool has passed the joint (so the tool is never faster than the
+  // feed of the block it is in).
+  if (a.feed_pc != b.feed_pc) {
+    const double f = std::min(a.feed_pc, b.feed_pc);
+    la_.insert(2 * slot + 1, CapPoint{c, f, true, static_cast<double>(lim_.span_cycles()), c},
+               cmd_mm_);
+  }
+}
+
+bool MovingAverageAccDec::holds(std::uint64_t index) const {
+  const std::size_t slot = buf_.slot(index);
+  return la_.live(2 * slot) || la_.live(2 * slot + 1);
+}
+
+void MovingAverageAccDec::on_retire(std::uint64_t index) {
+  const std::size_t slot = buf_.slot(index);
+  la_.clear(2 * slot);
+  la_.clear(2 * slot + 1);
+}
+
+const Segment* MovingAverageAccDec::advance_commanded() {
+  if (buf_.empty()) return nullptr;
+  cmd_idx_ = std::max(cmd_idx_, buf_.begin_index());
+  while (cmd_idx_ + 1 < buf_.end_index() && cmd_mm_ >= buf_[cmd_idx_].end_mm()) ++cmd_idx_;
+  if (cmd_idx_ >= buf_.end_index()) return nullptr;
+  const Segment& s = buf_[cmd_idx_];
+  return s.kind == ItemKind::kMotion ? &s : nullptr;
+}
+
+void MovingAverageAccDec::step(const CycleInput& in) {
+  const Segment* seg = advance_commanded();
+  const double uc = (in.hold || seg == nullptr) ? 0.0 : seg->feed_pc * in.or_ratio;  // Uc = F·OR
+  const double vb = seg != nullptr ? seg->vb_pc : 0.0;
+  double u = 0;
+  double next = cmd_mm_;
+  if (mode_ == Mode::kLookahead) {
+    const double ul = la_.limit(cmd_mm_, tool_mm_, in.or_ratio);
+    if (check_ && la_.reference_limit(cmd_mm_, tool_mm_, in.or_ratio) != ul) ++mismatches_;
+    last_ul_ = ul;
+    const double to_stop = std::max(0.0, in.stop_mm - cmd_mm_);
+    u = std::max(0.0, std::min({uc, vb, ul, to_stop}));  // the limiter: U = min(Uc, Ul, Vb)
+    next = cmd_mm_ + u;
+    // Land exactly on the stop or range start that bound the step (no rounding short of it).
+    if (u > 0 && u >= to_stop) next = in.stop_mm;
+  } else {
+    // Conventional method: every block starts with `wait` cycles of blocked input, and the
+    // commanded position stops at the block end, so the tool stops there.
+    if (seg != nullptr && entered_ != cmd_idx_) {
+      entered_ = cmd_idx_;
+      wait_ = lim_.span_cycles() + (lim_.post_filter() ? lim_.post_cycles : 0);
+    }
+    if (wait_ > 0) {
+      --wait_;
+    } else if (seg != nullptr) {
+      const double target = std::min(seg->end_mm(), in.stop_mm);
+      const double left = std::max(0.0, target - cmd_mm_);
+      u = std::max(0.0, std::min({uc, vb, left}));
+      next = u > 0 && u >= left ? target : cmd_mm_ + u;
+    }
+    last_ul_ = u;
+  }
+  cmd_mm_ = next;
+  const double u1 = stage1_.push(u);
+  const double u2 = stage2_.push(u1);
+  tool_step_ = u2;
+  tool_mm_ += u2;
+  if (at_rest()) tool_mm_ = cmd_mm_;  // at rest the tool is exactly at the commanded position
+}
+
+}  // namespace cncore::motion

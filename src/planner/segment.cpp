@@ -1,0 +1,226 @@
+#include "planner/segment.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace cncore::planner {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kTiny = 1e-12;
+// Contour tolerance for curved shapes through the post filter in exact-path mode (G61): a
+// moving average cannot follow an arc exactly, so P1's 1 µm is used.
+constexpr double kExactPathArcTolMm = 1e-3;
+
+std::uint32_t ceil_cycles(double x) {
+  // Rounded up, but 84.0000000001 from rounding noise stays 84.
+  return static_cast<std::uint32_t>(std::max(1.0, std::ceil(x - 1e-9)));
+}
+
+// Largest v with (h/ρ)·v² + (d/T)·v ≤ a (normal + tangential ramp of one axis); stable form
+// v = 2a / (b + √(b² + 4·(h/ρ)·a)), b = d/T, valid for h = 0 too.
+double axis_accel_speed(double a, double d, double h_over_rho, double t) {
+  const double b = d / t;
+  const double den = b + std::sqrt(b * b + 4 * h_over_rho * a);
+  return den > 0 ? 2 * a / den : kInf;
+}
+
+double component(const Vec3& v, std::size_t i) {
+  return i == 0 ? v.x : (i == 1 ? v.y : v.z);
+}
+
+}  // namespace
+
+Limits make_limits(const MachineConfig& m, bool bound_resultant) {
+  Limits l;
+  const double tau = m.period_s;
+  l.period_s = tau;
+  const double vmax_mm_s = m.max_feed_mm_min / 60.0;
+  // T = ceil(Vmax / (Amax·τ)): a step 0 → Vmax through the moving average ramps at ≤ Amax.
+  l.t_cycles = ceil_cycles(vmax_mm_s / (m.max_accel_mm_s2 * tau));
+  // T2 = ceil(Amax / (Jmax·τ)): the second stage ramps the acceleration, jerk ≤ Jmax.
+  l.t2_cycles =
+      m.max_jerk_mm_s3 > 0 ? ceil_cycles(m.max_accel_mm_s2 / (m.max_jerk_mm_s3 * tau)) : 1;
+  l.post_cycles =
+      m.post_filter_s > 0 ? static_cast<std::uint32_t>(std::lround(m.post_filter_s / tau)) : 0;
+  l.vmax_pc = vmax_mm_s * tau;
+  l.amax_pc2 = m.max_accel_mm_s2 * tau * tau;
+  // Rapids share T (computed from the max feed), so a step to the rapid rate would ramp faster
+  // than Amax if the rate exceeded Amax·T·τ: the rapid speed is held to that.
+  l.rapid_pc = std::min(m.rapid_mm_min / 60.0 * tau, l.amax_pc2 * l.t_cycles);
+  l.contour_tolerance_mm = m.contour_tolerance_mm;
+  l.bound_resultant = bound_resultant;
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    const AxisConfig& a = m.axes[i];
+    l.axis_on[i] = a.enabled;
+    l.axis_vmax_pc[i] = a.max_speed_mm_min / 60.0 * tau;
+    l.axis_amax_pc2[i] = a.max_accel_mm_s2 * tau * tau;
+  }
+  return l;
+}
+
+AxisVec Segment::point_at(double u_mm) const {
+  if (u_mm >= length_mm) return end;
+  if (u_mm <= 0) return start;
+  const double f = u_mm / length_mm;
+  AxisVec p = start + f * (end - start);
+  if (arc) {
+    const double phi = f * sweep_rad;
+    const double r = r0 + (r1 - r0) * f;
+    p.set_xyz(center + (r * std::cos(phi)) * e1 + (r * std::sin(phi)) * e2 + (rise_mm * f) * n);
+  }
+  return p;
+}
+
+AxisVec Segment::direction_at(double phi) const {
+  AxisVec d = (1.0 / length_mm) * (end - start);
+  if (arc) {
+    // dH/dφ · Φ/L (the arc is parametrised proportionally to its length).
+    const double f = sweep_rad > 0 ? phi / sweep_rad : 0;
+    const double r = r0 + (r1 - r0) * f;
+    const double dr = (r1 - r0) / sweep_rad;
+    const Vec3 c{std::cos(phi), std::sin(phi), 0};
+    const Vec3 dh =
+        (r * -c.y + dr * c.x) * e1 + (r * c.x + dr * c.y) * e2 + (rise_mm / sweep_rad) * n;
+    d.set_xyz((sweep_rad / length_mm) * dh);
+  }
+  return d;
+}
+
+Segment make_motion_segment(const Block& b, const Limits& lim) {
+  Segment s;
+  s.kind = ItemKind::kMotion;
+  s.line = b.line;
+  s.start = b.start;
+  s.end = b.end;
+  s.rapid = b.kind == BlockKind::kRapid;
+  s.mode = b.path_mode;
+  s.tol_mm = b.path_mode == PathMode::kBlend
+                 ? (b.tolerance_mm >= 0 ? b.tolerance_mm : lim.contour_tolerance_mm)
+                 : 0.0;
+  s.feed_pc = s.rapid ? lim.rapid_pc : b.feed_mm_min / 60.0 * lim.period_s;
+
+  const AxisVec delta = b.end - b.start;
+  const double xyz_len = norm(delta.xyz());
+  const double rot_len =
+      std::sqrt(delta[kA] * delta[kA] + delta[kB] * delta[kB] + delta[kC] * delta[kC]);
+
+  if (b.kind == BlockKind::kArc) {
+    const double nn = norm(b.normal);
+    const Vec3 n = nn > kTiny ? (1.0 / nn) * b.normal : Vec3{0, 0, 1};
+    const Vec3 v0 = b.start.xyz() - b.center;
+    const Vec3 c = b.center + dot(v0, n) * n;  // centre in the plane of the start point
+    const Vec3 v0p = b.start.xyz() - c;
+    const double r0 = norm(v0p);
+    if (r0 > 1e-9) {
+      const Vec3 e1 = (1.0 / r0) * v0p;
+      const Vec3 e2 = cross(n, e1);
+      const Vec3 v1 = b.end.xyz() - c;
+      const double rise = dot(v1, n);
+      const Vec3 v1p = v1 - rise * n;
+      const double r1 = norm(v1p);
+      double phi = std::atan2(dot(v1p, e2), dot(v1p, e1));
+      if (phi < 0) phi += 2 * std::numbers::pi;
+      // End on the start radius line: a full turn (a zero-sweep arc is not an arc).
+      if (phi * std::max(r0, r1) < 1e-9) phi = 2 * std::numbers::pi;
+      phi += 2 * std::numbers::pi * b.turns;
+      s.arc = true;
+      s.center = c;
+      s.e1 = e1;
+      s.e2 = e2;
+      s.n = n;
+      s.r0 = r0;
+      s.r1 = r1;
+      s.sweep_rad = phi;
+      s.rise_mm = rise;
+      const double rm = 0.5 * (r0 + r1);
+      s.length_mm = std::sqrt(rm * phi * rm * phi + rise * rise);
+      const double p = rise / phi;
+      s.rho_mm = (rm * rm + p * p) / rm;
+    }
+  }
+  if (!s.arc) s.length_mm = xyz_len > kTiny ? xyz_len : rot_len;
+  if (s.length_mm <= kTiny) {
+    s.length_mm = 0;
+    return s;
+  }
+
+  // Shape passing speed Vb.
+  double vb = s.rapid ? lim.rapid_pc : lim.vmax_pc;
+  const double t = lim.t_cycles;
+  if (s.arc) {
+    const double a = lim.amax_pc2;
+    const double rho = s.rho_mm;
+    if (!lim.bound_resultant) {
+      vb = std::min(vb, std::sqrt(rho * a));  // v²/ρ ≤ Amax
+    } else {
+      // (v²/ρ)² + (v/T)² ≤ Amax²: normal plus the filter's tangential ramp (≤ Vb/T per cycle).
+      const double it2 = 1 / (t * t);
+      const double x = 0.5 * rho * rho * (-it2 + std::sqrt(it2 * it2 + 4 * a * a / (rho * rho)));
+      vb = std::min(vb, std::sqrt(x));
+    }
+  }
+  // Per-axis limits: speed v·|d_i| ≤ vmax_i; acceleration (h_i/ρ)·v² + (|d_i|/T)·v ≤ a_i,
+  // h_i the share of axis i in the arc's plane (normal acceleration) — the slowest axis decides.
+  const double rmax = std::max(s.r0, s.r1);
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    if (!lim.axis_on[i]) continue;
+    double d = std::abs(delta[i]) / s.length_mm;
+    double h = 0;
+    if (s.arc && i < 3) {
+      const double e1i = component(s.e1, i), e2i = component(s.e2, i), ni = component(s.n, i);
+      h = std::hypot(e1i, e2i);
+      d = (rmax * h + std::abs(s.r1 - s.r0) / s.sweep_rad * h +
+           std::abs(s.rise_mm / s.sweep_rad * ni)) *
+          s.sweep_rad / s.length_mm;
+    }
+    if (lim.axis_vmax_pc[i] > 0 && d > kTiny) vb = std::min(vb, lim.axis_vmax_pc[i] / d);
+    if (lim.axis_amax_pc2[i] > 0 && (d > kTiny || h > kTiny)) {
+      vb = std::min(vb, axis_accel_speed(lim.axis_amax_pc2[i], d, s.arc ? h / s.rho_mm : 0, t));
+    }
+  }
+  // Post filter on an arc: a moving average over Tp cycles (arc length ≤ v·Tp) pulls the point
+  // inside by ρ·(1 − sin(x)/x) ≈ (v·Tp)²/(24ρ), x the half angle; keep it ≤ tolerance.
+  if (s.arc && lim.post_filter()) {
+    const double tol = s.tol_mm > 0 ? s.tol_mm : kExactPathArcTolMm;
+    vb = std::min(vb, std::sqrt(24 * s.rho_mm * tol) / lim.post_cycles);
+  }
+  s.vb_pc = vb;
+  return s;
+}
+
+double corner_rounding_mm(double v_pc, double sin_theta, std::uint32_t tp_cycles) {
+  return v_pc * (tp_cycles + 1) * sin_theta / 8;
+}
+
+double joint_speed_pc(const Segment& a, const Segment& b, const Limits& lim) {
+  const AxisVec e = a.end_direction();
+  const AxisVec s = b.start_direction();
+  double v = std::min(a.vb_pc, b.vb_pc);
+  // Path corner: the velocity turns from v·E to v·S within one cycle, |Δv| = v·|S − E| =
+  // 2·v·sin(θ/2) ≤ Amax·τ  ⇒  V = Amax·τ / |S − E| (per-cycle units: Amax·τ²).
+  const Vec3 dxyz = s.xyz() - e.xyz();
+  const double turn = norm(dxyz);
+  if (turn > kTiny) v = std::min(v, lim.amax_pc2 / turn);
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    const double di = std::abs(s[i] - e[i]);
+    if (lim.axis_on[i] && lim.axis_amax_pc2[i] > 0 && di > kTiny) {
+      v = std::min(v, lim.axis_amax_pc2[i] / di);
+    }
+  }
+  if (lim.post_filter() && turn > 1e-9) {
+    const double tol = std::min(a.tol_mm, b.tol_mm);
+    const double sin_theta = norm(cross(e.xyz(), s.xyz()));
+    if (tol <= 0) {
+      v = 0;  // exact path: stop at the corner so that the filter cannot round it
+    } else if (sin_theta > kTiny) {
+      // e = v·(Tp + 1)·sin θ / 8 ≤ 0.9·tol (10 % kept for the discrete rounding of the crossing).
+      v = std::min(v, 0.9 * 8 * tol / ((lim.post_cycles + 1) * sin_theta));
+    }
+  }
+  return std::max(0.0, v);
+}
+
+}  // namespace cncore::planner

@@ -1,0 +1,93 @@
+// Execution data (spec 01, stage 1–2): one entry of the execution-data buffer per block, with
+// its shape, path length, feed and passing speeds, and the passing speed at the joint between
+// two motion segments. Speeds are in mm per interpolation cycle ("pc"), accelerations in mm per
+// cycle² ("pc2"), path positions in mm.
+//
+// Path length: XYZ length for moves with an XYZ component (rotary axes follow linearly);
+// rotary-only moves use their length in degrees as the path length (1° counts as 1 mm, the feed
+// is then in degrees per minute).
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "config/machine_config.hpp"
+#include "core/block.hpp"
+#include "core/geometry.hpp"
+
+namespace cncore::planner {
+
+// Machine limits in per-cycle units, derived once from the MachineConfig.
+struct Limits {
+  double period_s = 0.001;
+  std::uint32_t t_cycles = 1;     // T: first moving average, ceil(Vmax / (Amax·τ))
+  std::uint32_t t2_cycles = 1;    // T2: second stage, ceil(Amax / (Jmax·τ)); 1 = no second stage
+  std::uint32_t post_cycles = 0;  // Tp: post-interpolation moving average; 0 or 1 = off
+  double vmax_pc = 0;             // max feed
+  double rapid_pc = 0;            // rapid rate, at most amax·T (the filter's ramp bound)
+  double amax_pc2 = 0;
+  double contour_tolerance_mm = 0.01;
+  bool bound_resultant = false;  // arcs: bound √(a_t² + a_n²) by Amax instead of each
+  std::array<bool, kMaxAxes> axis_on{};
+  std::array<double, kMaxAxes> axis_vmax_pc{};   // ≤ 0: no limit
+  std::array<double, kMaxAxes> axis_amax_pc2{};  // ≤ 0: no limit
+
+  // M: span of the acc/dec filter in cycles (T + T2 − 1).
+  std::uint32_t span_cycles() const { return t_cycles + t2_cycles - 1; }
+  bool post_filter() const { return post_cycles > 1; }
+};
+Limits make_limits(const MachineConfig& machine, bool bound_resultant);
+
+enum class ItemKind : std::uint8_t { kMotion, kDwell, kAux };
+
+struct Segment {
+  ItemKind kind = ItemKind::kMotion;
+  bool arc = false;
+  bool rapid = false;
+  std::uint32_t line = 0;
+  AxisVec start, end;  // events: both are the position where they happen
+  double length_mm = 0;
+  double s0_mm = 0;  // path position of the start (global, along the commanded path)
+
+  // Arc / helix: H(φ) = center + r(φ)(cos φ·e1 + sin φ·e2) + rise·(φ/Φ)·n, r linear in φ.
+  Vec3 center, e1, e2, n;
+  double r0 = 0, r1 = 0, sweep_rad = 0, rise_mm = 0;
+  double rho_mm = 0;  // radius of curvature (r² + p²)/r, p = rise/Φ
+
+  double feed_pc = 0;  // F at 100 % override (rapids: the rapid rate)
+  double vb_pc = 0;    // shape passing speed Vb
+  double tol_mm = 0;   // contour tolerance for the post filter at its end
+  PathMode mode = PathMode::kBlend;
+
+  // Events
+  bool barrier = false;  // the motion must stop and settle before the event (dwell, M0, G9 …)
+  std::uint32_t dwell_cycles = 0;
+  char aux_letter = 0;
+  double aux_value = 0;
+  bool done = false;  // event handled (set by the interpolator)
+
+  double end_mm() const { return s0_mm + length_mm; }
+  // Point at path distance u from the start (clamped to [0, L]); u ≥ L gives `end` exactly.
+  AxisVec point_at(double u_mm) const;
+  // Direction per path mm of every axis at the start / end (axis displacement per path mm).
+  AxisVec start_direction() const { return direction_at(0); }
+  AxisVec end_direction() const { return direction_at(sweep_rad); }
+
+ private:
+  AxisVec direction_at(double phi) const;
+};
+
+// Builds a motion segment (kRapid, kLine, kArc) with its length and Vb. Zero-length moves give
+// length 0 (the caller drops them).
+Segment make_motion_segment(const Block& block, const Limits& limits);
+
+// Passing speed Vg at the joint from a to b (both motion segments): corner limit
+// Amax·τ/(2 sin θ/2) = Amax·τ/|S − E| from the unit tangents, per-axis corner limits
+// a_i·τ/|S_i − E_i|, min with both Vb's and, with the post filter, the contour-tolerance limit.
+double joint_speed_pc(const Segment& a, const Segment& b, const Limits& limits);
+
+// Contour error of a corner of angle θ passed at speed ≤ v (mm/cycle) for Tp cycles on both
+// sides, through a Tp-cycle moving average: e ≤ v·(Tp + 1)·sin θ / 8.
+double corner_rounding_mm(double v_pc, double sin_theta, std::uint32_t tp_cycles);
+
+}  // namespace cncore::planner
