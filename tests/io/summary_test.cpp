@@ -136,6 +136,32 @@ TEST(Summary, SlowestSpotsRankTimeLostAgainstTheProgrammedFeed) {
   EXPECT_EQ(s.blocks, 3u);
 }
 
+// A loop executes line 7 twice (with line 8 between): both passes add up on one entry.
+// Each pass of line 7: 100 cycles at 25 mm/s against F3000 (50 mm/s): lost 0.1·0.5 = 0.05 s.
+TEST(Summary, RepeatedLinesAddUp) {
+  SummaryObserver obs(default_machine_config(), "lookahead");
+  double t = 0, x = 0;
+  obs.on_sample(at(t, 0, {0, 0, 0}));
+  auto pass = [&](std::uint32_t line, double feed, double v_mm_s) {
+    obs.on_block(line_block(line, feed));
+    for (int k = 0; k < 100; ++k) {
+      t += kTau;
+      x += v_mm_s * kTau;
+      obs.on_sample(at(t, line, {x, 0, 0}));
+    }
+  };
+  pass(7, 3000, 25);
+  pass(8, 3000, 50);
+  pass(7, 3000, 25);
+  obs.on_finish();
+  const Summary& s = obs.summary();
+  ASSERT_EQ(s.slowest.size(), 1u);
+  EXPECT_EQ(s.slowest[0].line, 7u);
+  EXPECT_EQ(s.slowest[0].visits, 2u);
+  EXPECT_NEAR(s.slowest[0].lost_s, 0.1, 1e-9);
+  EXPECT_NEAR(s.slowest[0].time_s, 0.2, 1e-9);
+}
+
 TEST(Summary, WarnsOnTravelAndLimitViolations) {
   SummaryObserver obs(default_machine_config(), "stop");
   // X jumps to 301 mm (beyond +300) with a huge acceleration.
