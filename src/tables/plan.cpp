@@ -281,6 +281,29 @@ TablePlan plan_tables(std::vector<Table> tables, const MachineConfig& machine,
   return plan;
 }
 
+ReferenceSource default_reference(const Table& first, const MachineConfig& machine,
+                                  double spindle_rpm, double master_speed_mm_min) {
+  switch (first.ref_kind) {
+    case RefKind::kTime:
+      return ReferenceSource::time_clock();
+    case RefKind::kSpindle:
+      if (!(spindle_rpm > 0)) {
+        throw InputError(first.file, first.ref_line, first.ref_col,
+                         "REF SPINDLE needs a spindle speed > 0 rpm");
+      }
+      return ReferenceSource::spindle(spindle_rpm);
+    case RefKind::kAxis:
+      if (!(master_speed_mm_min > 0)) {
+        throw InputError(
+            first.file, first.ref_line, first.ref_col,
+            fmt::format("REF AXIS {} needs a master axis speed > 0", kAxisLetters[first.ref_axis]));
+      }
+      return ReferenceSource::master_axis(machine.start_position[first.ref_axis],
+                                          master_speed_mm_min);
+  }
+  return ReferenceSource::time_clock();
+}
+
 std::string format_effective(const TablePlan& plan) {
   std::string s;
   const char* mode = plan.options.settings.cancel_mode == CancelMode::kClear ? "clear" : "rebase";

@@ -53,7 +53,16 @@ class Cursor {
       }
       if (has_p1_) m1_ = tangents_at_p1();
       done_ = !has_p1_;
+      if (!done_) check_segment(t_s);
     }
+  }
+
+  // Rows read during the run may differ from the plan (signals changed): a segment that now
+  // exceeds an axis speed (or, CUBIC, acceleration) limit is reported as a run warning.
+  void watch_limits(const MachineConfig& m, double rate_per_s, std::vector<std::string>* out) {
+    machine_ = &m;
+    rate_ = rate_per_s;
+    warnings_ = out;
   }
 
   // Positions of this table's axes at `ref`.
@@ -94,6 +103,36 @@ class Cursor {
     }
     return m;
   }
+  void check_segment(double t_s) {
+    if (machine_ == nullptr || rate_ <= 0) return;
+    const double h = p1_.ref - p0_.ref;
+    for (std::size_t a = 0; a < kMaxAxes; ++a) {
+      if (!((t_->axis_mask >> a) & 1U)) continue;
+      const AxisConfig& ac = machine_->axes[a];
+      double v_mm_min = 0, a_mm_s2 = 0;
+      if (cubic_) {
+        auto e = detail::hermite_extremes(p0_.position[a], p1_.position[a], m0_[a], m1_[a], h);
+        v_mm_min = e.slope * rate_ * 60.0;
+        a_mm_s2 = e.curvature * rate_ * rate_;
+      } else {
+        v_mm_min = std::abs(p1_.position[a] - p0_.position[a]) / h * rate_ * 60.0;
+      }
+      bool fast = v_mm_min > ac.max_speed_mm_min * (1 + 1e-6);
+      bool hard = a_mm_s2 > ac.max_accel_mm_s2 * (1 + 1e-6);
+      if (!fast && !hard) continue;
+      if (warnings_->size() >= kMaxWarnings) return;
+      const Row& row = t_->rows[static_cast<std::size_t>(p1_.row)];
+      warnings_->push_back(fmt::format(
+          "{}:{}:{}: warning: at t = {:.6g} s the segment to this row (reference {:.6g}) needs {} "
+          "{:.6g} mm/min and {:.6g} mm/s² (limits {:.6g}, {:.6g}): a value read during the run "
+          "differs from the plan",
+          t_->file, row.line, row.col, t_s, p1_.ref, kAxisLetters[a], v_mm_min, a_mm_s2,
+          ac.max_speed_mm_min, ac.max_accel_mm_s2));
+    }
+  }
+
+  static constexpr std::size_t kMaxWarnings = 100;
+
   void fire(const EffectivePoint& p, std::vector<MEvent>& events) const {
     for (std::int32_t r : {p.row, p.extra_row}) {
       if (r < 0) continue;
@@ -111,6 +150,9 @@ class Cursor {
   bool has_p1_ = false, has_p2_ = false;
   AxisVec m0_, m1_;  // tangents (per reference unit) at p0 and p1
   bool done_ = false;
+  const MachineConfig* machine_ = nullptr;
+  double rate_ = 0;
+  std::vector<std::string>* warnings_ = nullptr;
 };
 
 }  // namespace
@@ -135,12 +177,13 @@ RunSummary run_tables(const TablePlan& plan,
   cursors.reserve(plan.tables.size());
   TableSample s;
   s.m_codes.reserve(16);
+  RunSummary sum;
   for (std::size_t i = 0; i < plan.tables.size(); ++i) {
     cursors.emplace_back(plan.tables[i], plan, start_ref);
+    cursors.back().watch_limits(plan.machine, src.rate_per_s / plan.slow_factor, &sum.warnings);
     cursors.back().start(static_cast<std::uint8_t>(i), s.m_codes);
   }
 
-  RunSummary sum;
   AxisVec prev = plan.start_position;
   for (std::uint64_t k = 0;; ++k) {
     const double t_s = static_cast<double>(k) * period_s;

@@ -141,6 +141,13 @@ struct ReferenceSource {
   }
 };
 
+// The reference source for the tables' REF kind, as the command line would build it: the time
+// clock for REF TIME; the spindle at spindle_rpm for REF SPINDLE; for REF AXIS the master axis
+// from its machine start position at master_speed_mm_min. Throws InputError (at the REF line)
+// when the speed it needs is not > 0.
+ReferenceSource default_reference(const Table& first, const MachineConfig& machine,
+                                  double spindle_rpm, double master_speed_mm_min);
+
 struct RunOptions {
   TableSettings settings;
   ReferenceSource reference = ReferenceSource::time_clock();

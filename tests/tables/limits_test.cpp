@@ -113,5 +113,42 @@ TEST(Limits, MasterAxisTooFast) {
   EXPECT_EQ(errors[0].line, 1U);
 }
 
+TEST(Limits, SignalChangedDuringTheRunIsCheckedWhenTheRowIsRead) {
+  // At t = 0 R5 = 0 and the plan is clean; at 0.5 s R5 becomes -600, so the row L2000 read at
+  // 1.0 s lands at 1400 ms: 100 mm in 400 ms = 15 000 mm/min > 10 000 mm/min.
+  RunOptions o;
+  o.values.signals[5] = 0;
+  o.values.signal_changes.push_back({0.5, 5, -600});
+  TableRun r = run_texts({"REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=R5\nL3000 X300\n"}, o);
+  EXPECT_FALSE(r.plan.has_errors());
+  ASSERT_EQ(r.summary.warnings.size(), 1U);
+  EXPECT_NE(r.summary.warnings[0].find("t1.tbl:4:1: warning:"), std::string::npos)
+      << r.summary.warnings[0];
+  EXPECT_NE(r.summary.warnings[0].find("X 15000 mm/min"), std::string::npos)
+      << r.summary.warnings[0];
+  // And the motion did follow the new value: X = 200 at 1.4 s.
+  EXPECT_NEAR(time_reaching(r.samples, kX, 200), 1.4, 0.0005);
+}
+
+TEST(Limits, DefaultReferenceFollowsTheTableKind) {
+  MachineConfig m = test_machine();
+  m.start_position[kY] = 12;
+  Table time = parse_table("REF TIME\nAXES X\nL10 X1\n", "a.tbl");
+  Table spin = parse_table("REF SPINDLE\nAXES X\nL10 X1\n", "b.tbl");
+  Table axis = parse_table("\nREF AXIS Y\nAXES X\nL10 X1\n", "c.tbl");
+  EXPECT_DOUBLE_EQ(default_reference(time, m, 0, 0).rate_per_s, 1000);
+  EXPECT_DOUBLE_EQ(default_reference(spin, m, 100, 0).rate_per_s, 600);  // 100 rpm = 600 deg/s
+  ReferenceSource y = default_reference(axis, m, 0, 1200);
+  EXPECT_DOUBLE_EQ(y.start, 12);
+  EXPECT_DOUBLE_EQ(y.rate_per_s, 20);
+  EXPECT_THROW(default_reference(spin, m, 0, 0), InputError);
+  try {
+    default_reference(axis, m, 100, 0);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 2U);
+  }
+}
+
 }  // namespace
 }  // namespace cncore::tables::test
