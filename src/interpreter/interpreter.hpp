@@ -23,6 +23,10 @@ class Interpreter {
  public:
   // Opens the program file. Throws InputError if it cannot be read.
   Interpreter(const std::string& path, const MachineConfig& machine, const Options& options);
+  // Interprets program text held in memory; `name` is the file name used in error messages.
+  struct FromText {};
+  Interpreter(FromText, std::string text, std::string name, const MachineConfig& machine,
+              const Options& options);
   ~Interpreter();
   Interpreter(const Interpreter&) = delete;
   Interpreter& operator=(const Interpreter&) = delete;
@@ -36,7 +40,10 @@ class Interpreter {
   std::unique_ptr<Impl> impl_;
 };
 
-// One line of `cncore check --blocks` for a block (stable text format used by golden tests).
+// One line of `cncore check --blocks` for a block (stable text format used by golden tests,
+// documented in docs/gcode.md). This overload prints the X, Y and Z axes.
 std::string format_block(const Block& block);
+// The same, printing the axes enabled on `machine` (in X Y Z A B C order).
+std::string format_block(const Block& block, const MachineConfig& machine);
 
 }  // namespace cncore::interp

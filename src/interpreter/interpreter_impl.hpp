@@ -1,0 +1,191 @@
+// Private state of the Interpreter, shared by interpreter.cpp (reading and executing blocks)
+// and flow.cpp (O-words, M98/M99).
+#pragma once
+
+#include <array>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <vector>
+
+#include "config/machine_config.hpp"
+#include "core/block.hpp"
+#include "interpreter/codes.hpp"
+#include "interpreter/expression.hpp"
+#include "interpreter/interpreter.hpp"
+#include "interpreter/lexer.hpp"
+#include "interpreter/modal_state.hpp"
+#include "interpreter/parameters.hpp"
+#include "interpreter/reader.hpp"
+
+namespace cncore::interp {
+
+// The words of one block after evaluation (values as written, program units).
+struct Words {
+  struct Value {
+    double value = 0;
+    std::uint32_t col = 0;
+    bool present = false;
+  };
+  struct Code {
+    int code10 = 0;  // ten times the value: G59.1 → 591
+    std::uint32_t col = 0;
+  };
+  struct Assignment {
+    ParamRef ref;
+    double value = 0;
+  };
+  static constexpr int kMaxCodes = 16;
+
+  std::array<Value, 26> letter{};  // indexed by letter − 'a'
+  std::array<Code, kMaxCodes> g{};
+  std::array<Code, kMaxCodes> m{};
+  int g_count = 0, m_count = 0;
+  std::array<int, kGroupSlots> g_group{};   // index into g, or −1
+  std::array<int, kMGroupSlots> m_group{};  // index into m, or −1 (coolant: the last one)
+  std::vector<Assignment> assignments;
+  std::uint32_t first_col = 1;
+
+  void clear() {
+    letter.fill({});
+    g_count = m_count = 0;
+    g_group.fill(-1);
+    m_group.fill(-1);
+    assignments.clear();
+  }
+  const Value& operator[](char c) const { return letter[static_cast<std::size_t>(c - 'a')]; }
+  bool has(char c) const { return (*this)[c].present; }
+  bool has_g(int code10) const {
+    for (int i = 0; i < g_count; ++i) {
+      if (g[static_cast<std::size_t>(i)].code10 == code10) return true;
+    }
+    return false;
+  }
+  bool has_m(int code10) const {
+    for (int i = 0; i < m_count; ++i) {
+      if (m[static_cast<std::size_t>(i)].code10 == code10) return true;
+    }
+    return false;
+  }
+  const Code* group(GGroup grp) const {
+    const int i = g_group[static_cast<std::size_t>(grp)];
+    return i < 0 ? nullptr : &g[static_cast<std::size_t>(i)];
+  }
+  const Code* mgroup(MGroup grp) const {
+    const int i = m_group[static_cast<std::size_t>(grp)];
+    return i < 0 ? nullptr : &m[static_cast<std::size_t>(i)];
+  }
+};
+
+// O-word keywords.
+enum class OKeyword : std::uint8_t {
+  kNone,  // "O1000" alone: Fanuc program / subprogram number
+  kSub,
+  kEndSub,
+  kCall,
+  kReturn,
+  kIf,
+  kElseIf,
+  kElse,
+  kEndIf,
+  kWhile,
+  kEndWhile,
+  kDo,
+  kRepeat,
+  kEndRepeat,
+  kBreak,
+  kContinue,
+};
+
+struct OWord {
+  std::string label;  // "100" for o100 / O0100, "<name>" for o<name>
+  OKeyword keyword = OKeyword::kNone;
+  std::uint32_t col = 0;
+  std::size_t args = 0;  // position in the normalised text after the keyword
+};
+
+struct SubDef {
+  LinePos body;  // the line after "oN sub" (or after the Fanuc "O1000" line)
+  std::uint32_t line = 0;
+};
+
+struct Frame {
+  std::string label;
+  LinePos return_to;  // the line after the call
+  LinePos body;       // for M98 repeats
+  std::size_t loop_depth = 0;
+  std::uint32_t line = 0, col = 0;  // the call
+  std::uint32_t def_line = 0;       // where the subroutine is defined
+  std::uint64_t repeats_left = 0;   // M98 L
+  bool fanuc = false;               // M98/M99 (no new parameter scope)
+};
+
+struct Loop {
+  enum class Kind : std::uint8_t { kWhile, kDo, kRepeat };
+  std::string label;
+  Kind kind = Kind::kWhile;
+  LinePos head;  // kWhile: the while line; kDo/kRepeat: the first body line
+  std::uint64_t iterations = 0;
+  double remaining = 0;  // kRepeat
+  std::uint32_t line = 0, col = 0;
+};
+
+struct Interpreter::Impl final : LiveParameters {
+  Impl(LineReader r, std::string name, const MachineConfig& m, const Options& options);
+
+  bool next(Block& out);
+
+  // interpreter.cpp
+  void step();                        // read and execute one line
+  void parse_words(std::size_t pos);  // fills words_ from line_.text
+  void execute_words();               // LinuxCNC order of execution
+  void motion(const AxisVec& target, bool have_axes, bool machine_coords, std::uint32_t col);
+  void arc(const AxisVec& target, bool ccw, std::uint32_t col);
+  void emit_motion(BlockKind kind, const AxisVec& target, std::uint32_t col);
+  void check_travel(const AxisVec& lo, const AxisVec& hi, std::uint32_t col) const;
+  void set_offsets();        // G10, G92 family
+  void go_home(int code10);  // G28 / G30 (and .1)
+  AxisVec target_from_words(bool machine_coords) const;
+  double offset(std::size_t axis) const;  // work + G92 offset of the active system (mm)
+  Block base_block(BlockKind kind) const;
+  void emit_aux(char letter, double value, bool waits);
+  bool read_live(int number, double& value) const override;
+  [[noreturn]] void fail(std::uint32_t col, const std::string& message) const {
+    ctx_.fail(col, message);
+  }
+
+  // flow.cpp
+  bool parse_oword(OWord& o) const;  // line_ starts with an O word
+  void execute_oword(const OWord& o);
+  OKeyword skip_to(const OWord& from, std::initializer_list<OKeyword> stops, const char* what);
+  void skip_fanuc_sub(std::uint32_t def_line);
+  const SubDef* find_sub(const std::string& key, std::uint32_t col);
+  void call_fanuc(std::uint32_t col);    // M98
+  void return_fanuc(std::uint32_t col);  // M99
+  void end_of_file();
+  double condition(const OWord& o);
+  [[noreturn]] void loop_limit(const Loop& loop) const;
+  void count_iteration(Loop& loop) const;
+
+  std::string file_;
+  MachineConfig machine_;
+  LineReader reader_;
+  NormLine line_;
+  ErrorContext ctx_;
+  Parameters params_;
+  ModalState modal_;
+  Words words_;
+  AxisVec pos_;  // machine coordinates, mm / deg
+
+  std::vector<Block> out_;  // blocks of the current line, handed out by next()
+  std::size_t out_head_ = 0;
+  bool finished_ = false;
+  bool started_ = false;         // some program line has been executed
+  bool percent_framed_ = false;  // the program began with a "%" line
+
+  std::unordered_map<std::string, SubDef> subs_;
+  std::vector<Frame> frames_;
+  std::vector<Loop> loops_;
+};
+
+}  // namespace cncore::interp

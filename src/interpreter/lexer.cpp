@@ -1,0 +1,99 @@
+#include "interpreter/lexer.hpp"
+
+#include <fast_float/fast_float.h>
+
+#include "core/error.hpp"
+
+namespace cncore::interp {
+
+void ErrorContext::fail(std::uint32_t col, const std::string& message) const {
+  throw InputError(file != nullptr ? *file : std::string("<program>"), line, col, message);
+}
+
+void normalize_line(std::string_view raw, NormLine& out, const ErrorContext& ctx) {
+  out.text.clear();
+  out.cols.clear();
+  out.block_delete = false;
+  out.percent = false;
+
+  std::size_t i = 0;
+  const std::size_t n = raw.size();
+  // Leading blanks, then an optional block-delete slash (only as the first character).
+  while (i < n && (raw[i] == ' ' || raw[i] == '\t')) ++i;
+  if (i < n && raw[i] == '/') {
+    out.block_delete = true;
+    ++i;
+  }
+  for (; i < n; ++i) {
+    const char c = raw[i];
+    if (c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v') continue;
+    if (c == ';') break;  // the rest of the line is a comment
+    if (c == '(') {
+      const std::size_t open = i;
+      for (++i; i < n && raw[i] != ')'; ++i) {
+        if (raw[i] == '(') {
+          ctx.fail(static_cast<std::uint32_t>(i + 1), "nested comment: '(' inside a comment");
+        }
+      }
+      if (i >= n) {
+        ctx.fail(static_cast<std::uint32_t>(open + 1), "unclosed comment: '(' without ')'");
+      }
+      continue;
+    }
+    if (c == ')') ctx.fail(static_cast<std::uint32_t>(i + 1), "')' without '(' (comment)");
+    out.text.push_back(c >= 'A' && c <= 'Z' ? static_cast<char>(c - 'A' + 'a') : c);
+    out.cols.push_back(static_cast<std::uint32_t>(i + 1));
+  }
+  out.cols.push_back(static_cast<std::uint32_t>(n + 1));
+  if (!out.block_delete && out.text == "%") out.percent = true;
+}
+
+bool scan_number(const NormLine& line, std::size_t& pos, double& value, const ErrorContext& ctx) {
+  const std::string& t = line.text;
+  const std::size_t start = pos;
+  std::size_t i = pos;
+  bool digits = false;
+  // Fast path: a plain integer part accumulated directly.
+  while (i < t.size() && is_digit(t[i])) {
+    ++i;
+    digits = true;
+  }
+  bool dot = false;
+  if (i < t.size() && t[i] == '.') {
+    dot = true;
+    ++i;
+    while (i < t.size() && is_digit(t[i])) {
+      ++i;
+      digits = true;
+    }
+  }
+  if (!digits) return false;
+  if (i < t.size() && t[i] == '.') {
+    std::size_t e = i;
+    while (e < t.size() && (is_digit(t[e]) || t[e] == '.')) ++e;
+    ctx.fail(line.col(start), "bad number '" + t.substr(start, e - start) + "'");
+  }
+  if (!dot && i - start <= 15) {
+    // Integers are common (N, G, M, small coordinates); skip the float parser for them.
+    std::int64_t v = 0;
+    for (std::size_t k = start; k < i; ++k) v = v * 10 + (t[k] - '0');
+    value = static_cast<double>(v);
+  } else {
+    const char* b = t.data() + start;
+    const char* e = t.data() + i;
+    if (*b == '.') {
+      // fast_float accepts ".5" in its general format, but be explicit for robustness.
+      double frac = 0;
+      auto r = fast_float::from_chars(b, e, frac);
+      if (r.ec != std::errc()) ctx.fail(line.col(start), "bad number");
+      value = frac;
+    } else {
+      auto r = fast_float::from_chars(b, e, value);
+      if (r.ec != std::errc() || r.ptr != e) ctx.fail(line.col(start), "bad number");
+    }
+  }
+  pos = i;
+  return true;
+}
+
+}  // namespace cncore::interp

@@ -1,0 +1,32 @@
+// The modal state of the interpreter: everything a program sets once and that stays in force
+// until changed. Internally every length is mm and every position machine coordinates; the
+// program's units (G20/G21) only scale the numbers as they are read.
+#pragma once
+
+#include <cstdint>
+
+#include "core/block.hpp"
+#include "interpreter/arcs.hpp"
+
+namespace cncore::interp {
+
+enum class Motion : std::uint8_t { kNone, kRapid, kLine, kArcCw, kArcCcw };  // G80 G0 G1 G2 G3
+
+struct ModalState {
+  Motion motion = Motion::kNone;          // group 1 (LinuxCNC starts in G80)
+  Plane plane = Plane::kXY;               // group 2: G17
+  bool absolute = true;                   // group 3: G90 (false: G91)
+  bool arc_absolute = false;              // group 4: G91.1 (true: G90.1)
+  bool inch = false;                      // group 6: G21 (true: G20)
+  int coord_system = 1;                   // group 12: 1 = G54 … 6 = G59, 7…9 = G59.1…G59.3
+  PathMode path_mode = PathMode::kBlend;  // group 13: G64
+  double tolerance_mm = -1;               // G64 P (mm); < 0: none given
+
+  double feed_mm_min = 0;  // F, converted to mm/min when it is read
+  bool feed_set = false;   // an F word has been seen
+  int tool = 0;            // T of the last M6 (tool in the spindle)
+
+  double length_unit_mm() const { return inch ? 25.4 : 1.0; }
+};
+
+}  // namespace cncore::interp

@@ -1,0 +1,124 @@
+#include "interpreter/reader.hpp"
+
+#include <cerrno>
+#include <cstring>
+
+#include "core/error.hpp"
+
+namespace cncore::interp {
+
+namespace {
+constexpr std::size_t kChunkBytes = 1 << 16;
+
+std::string_view strip_cr(std::string_view s) {
+  if (!s.empty() && s.back() == '\r') s.remove_suffix(1);
+  return s;
+}
+}  // namespace
+
+LineReader LineReader::open_file(const std::string& path) {
+  LineReader r;
+  r.file_ = std::fopen(path.c_str(), "rb");
+  if (r.file_ == nullptr) {
+    throw InputError(path, 0, 0, std::string("cannot open the program: ") + std::strerror(errno));
+  }
+  r.buf_.reserve(kChunkBytes);
+  return r;
+}
+
+LineReader LineReader::from_text(std::string text) {
+  LineReader r;
+  r.text_ = std::move(text);
+  r.in_memory_ = true;
+  return r;
+}
+
+LineReader::LineReader(LineReader&& other) noexcept
+    : file_(other.file_),
+      text_(std::move(other.text_)),
+      in_memory_(other.in_memory_),
+      buf_(std::move(other.buf_)),
+      buf_pos_(other.buf_pos_),
+      buf_offset_(other.buf_offset_),
+      eof_(other.eof_),
+      carry_(std::move(other.carry_)),
+      current_(other.current_),
+      following_(other.following_) {
+  other.file_ = nullptr;
+}
+
+LineReader::~LineReader() {
+  if (file_ != nullptr) std::fclose(file_);
+}
+
+bool LineReader::fill() {
+  if (eof_) return false;
+  buf_offset_ += buf_.size();
+  buf_.resize(kChunkBytes);
+  const std::size_t n = std::fread(buf_.data(), 1, kChunkBytes, file_);
+  buf_.resize(n);
+  buf_pos_ = 0;
+  if (n < kChunkBytes) eof_ = true;
+  return n > 0;
+}
+
+bool LineReader::next(std::string_view& line) {
+  current_ = following_;
+  if (in_memory_) {
+    const std::size_t pos = following_.offset;
+    if (pos >= text_.size()) return false;
+    const std::size_t nl = text_.find('\n', pos);
+    const std::size_t end = nl == std::string::npos ? text_.size() : nl;
+    line = strip_cr(std::string_view(text_).substr(pos, end - pos));
+    following_.offset = nl == std::string::npos ? text_.size() : nl + 1;
+    ++following_.line;
+    return true;
+  }
+  // File mode: the line may start in this chunk and end in a later one.
+  carry_.clear();
+  bool have_any = false;
+  for (;;) {
+    if (buf_pos_ >= buf_.size() && !fill()) break;
+    const char* begin = buf_.data() + buf_pos_;
+    const std::size_t avail = buf_.size() - buf_pos_;
+    const void* nl = std::memchr(begin, '\n', avail);
+    have_any = true;
+    if (nl != nullptr) {
+      const std::size_t len = static_cast<std::size_t>(static_cast<const char*>(nl) - begin);
+      buf_pos_ += len + 1;
+      if (carry_.empty()) {
+        line = strip_cr(std::string_view(begin, len));
+      } else {
+        carry_.append(begin, len);
+        line = strip_cr(carry_);
+      }
+      following_.offset = buf_offset_ + buf_pos_;
+      ++following_.line;
+      return true;
+    }
+    carry_.append(begin, avail);
+    buf_pos_ += avail;
+  }
+  if (!have_any || carry_.empty()) return false;
+  line = strip_cr(carry_);
+  following_.offset = buf_offset_ + buf_.size();
+  ++following_.line;
+  return true;
+}
+
+void LineReader::seek(LinePos pos) {
+  following_ = pos;
+  if (in_memory_) return;
+  // Reuse the current chunk when the target lies inside it (tight loops stay in memory).
+  if (pos.offset >= buf_offset_ && pos.offset <= buf_offset_ + buf_.size()) {
+    buf_pos_ = static_cast<std::size_t>(pos.offset - buf_offset_);
+    return;
+  }
+  std::fseek(file_, static_cast<long>(pos.offset), SEEK_SET);
+  eof_ = false;
+  buf_.clear();
+  buf_offset_ = pos.offset;
+  buf_pos_ = 0;
+}
+
+}  // namespace cncore::interp
