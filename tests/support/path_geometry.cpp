@@ -93,17 +93,18 @@ double PathSegment::project(const AxisVec& p, double u_min, double& distance_mm)
     }
     return phi;
   };
+  // Every turn of a multi-turn arc passes the same points: candidates come in increasing angle
+  // and a later one wins only if it is nearer by more than 1e-9 mm, so a tie goes to the next
+  // pass, never to a later turn.
   double best_phi = phi_lo;
-  double best_f = f_of(phi_lo);
+  double best_d = std::sqrt(std::max(0.0, f_of(phi_lo)));
   auto consider = [&](double phi) {
-    const double fv = f_of(phi);
-    if (fv < best_f) {
-      best_f = fv;
+    const double d = std::sqrt(std::max(0.0, f_of(phi)));
+    if (d < best_d - 1e-9) {
+      best_d = d;
       best_phi = phi;
     }
   };
-  consider(phi_hi);
-  // Candidates: the in-plane angle on every turn that overlaps the range.
   const double m_lo = std::floor((phi_lo - a0) / kTwoPi) - 1;
   const double m_hi = std::ceil((phi_hi - a0) / kTwoPi) + 1;
   for (double m = m_lo; m <= m_hi; m += 1) {
@@ -111,6 +112,8 @@ double PathSegment::project(const AxisVec& p, double u_min, double& distance_mm)
     if (cand < phi_lo - 0.5 || cand > phi_hi + 0.5) continue;
     consider(refine(std::clamp(cand, phi_lo, phi_hi)));
   }
+  consider(phi_hi);
+  const double best_f = best_d * best_d;
   const double u = best_phi / sweep_rad;
   // Other axes (A B C) move linearly with the angle.
   double extra = 0;

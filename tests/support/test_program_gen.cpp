@@ -117,3 +117,57 @@ TEST(ProgramGen, CamLikeHasTheRequestedSizeAndStaysInTravel) {
 
 }  // namespace
 }  // namespace cncore::testing::gen
+
+// ---- RapidCheck generators ----
+#include <rapidcheck/gtest.h>
+
+#include "path_geometry.hpp"
+#include "program_gen_rc.hpp"
+
+namespace cncore::testing::gen {
+namespace {
+
+RC_GTEST_PROP(BlockGenerator, ChainedInsideTravelWithConsistentArcs, ()) {
+  const auto bl = *blocks();
+  RC_ASSERT(!bl.empty());
+  AxisVec pos{};
+  for (const auto& b : bl) {
+    if (b.kind == BlockKind::kDwell || b.kind == BlockKind::kAux) continue;
+    RC_ASSERT(b.start == pos);
+    pos = b.end;
+    if (b.kind == BlockKind::kArc) {
+      // Start and end at the same distance from the centre in the plane (an exact arc).
+      const Vec3 n = b.normal;
+      auto in_plane = [&](Vec3 p) {
+        Vec3 q = p - b.center;
+        return q - dot(q, n) * n;
+      };
+      RC_ASSERT(std::abs(norm(in_plane(b.start.xyz())) - norm(in_plane(b.end.xyz()))) < 1e-9);
+      RC_ASSERT(std::abs(dot(b.start.xyz() - b.center, n)) < 1e-9);
+    }
+  }
+  const Path path = build_path(bl);
+  for (const auto& sg : path.segments) {
+    for (int k = 0; k <= 64; ++k) {
+      const AxisVec p = sg.point_at(k / 64.0);
+      RC_ASSERT(std::abs(p[kX]) <= 300.0);
+      RC_ASSERT(std::abs(p[kY]) <= 200.0);
+      RC_ASSERT(p[kZ] >= -200.0);
+      RC_ASSERT(p[kZ] <= 100.0);
+    }
+  }
+}
+
+RC_GTEST_PROP(BlockGenerator, OverrideStepsAreSortedAndInRange, ()) {
+  const auto steps = *override_steps(2.0);
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    RC_ASSERT(steps[i].first >= 0.0);
+    RC_ASSERT(steps[i].first <= 2.0);
+    RC_ASSERT(steps[i].second >= 10.0);
+    RC_ASSERT(steps[i].second <= 200.0);
+    if (i > 0) RC_ASSERT(steps[i - 1].first <= steps[i].first);
+  }
+}
+
+}  // namespace
+}  // namespace cncore::testing::gen

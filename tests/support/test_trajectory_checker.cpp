@@ -430,3 +430,44 @@ TEST(TrajectoryCsv, MissingColumnOrBadNumberIsAnError) {
 
 }  // namespace
 }  // namespace cncore::testing
+
+// ---- Property: no false alarms on random geometry ----
+#include <rapidcheck/gtest.h>
+
+#include "program_gen_rc.hpp"
+
+namespace cncore::testing {
+namespace {
+
+// A trajectory that stops at every block end with a trapezoid at Amax/2 and a speed below every
+// limit, dwelling where the program dwells: it breaks no property, whatever the geometry
+// (helices, reversals, segments far shorter than a cycle's travel).
+RC_GTEST_PROP(TrajectoryCheckerProperty, StopEveryBlockProfileIsClean, ()) {
+  gen::BlockGenOptions opt;
+  opt.min_feed_mm_min = 600;
+  const auto bl = *gen::blocks(opt);
+  const Path path = build_path(bl);
+  RC_PRE(!path.empty());
+  const Limits lim;
+  Trajectory tr;
+  double t = 0;
+  tr.add(0, path.segments[0].line, path.segments[0].start, 0);
+  for (const auto& sg : path.segments) {
+    double v = sg.rapid ? lim.rapid_mm_s() : std::min(sg.feed_mm_min / 60, lim.feed_mm_s());
+    if (sg.arc) v = std::min(v, 0.99 * std::sqrt(sg.radius_mm() * lim.max_accel_mm_s2));
+    const auto s = trapezoid(sg.length_mm, v, lim.max_accel_mm_s2 / 2);
+    for (std::size_t k = 1; k < s.size(); ++k) {
+      t += kTau;
+      tr.add(t, sg.line, sg.point_at(s[k] / sg.length_mm), sg.feed_mm_min);
+    }
+    for (double w = 0; w < sg.dwell_after_s; w += kTau) {
+      t += kTau;
+      tr.add(t, sg.line, sg.end, 0);
+    }
+  }
+  const auto rep = check_trajectory(tr, path, lim);
+  if (!rep.ok()) RC_FAIL(rep.summary());
+}
+
+}  // namespace
+}  // namespace cncore::testing

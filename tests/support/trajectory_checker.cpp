@@ -243,9 +243,15 @@ CheckReport check_trajectory(const Trajectory& tr, const Path& path, const Limit
     std::size_t k = 0;
     for (std::size_t j = 0; j < nseg; ++j) {
       // First sample at or past the end of segment j.
+      // A stop point is reached by a sample within its tolerance; a plain joint by a sample at
+      // it (within the snap distance) or on a later segment.
+      const bool is_last = j + 1 == nseg;
+      const double reach_tol =
+          segs[j].stop_after ? (is_last ? lim.end_tolerance_mm : lim.stop_tolerance_mm) + q : snap;
       auto reached = [&](std::size_t kk) {
-        return proj[kk].seg > j || (proj[kk].seg == j && proj[kk].u >= 1 - 1e-9) ||
-               dist_axes(tr.pos[kk], segs[j].end) <= snap;
+        // (u ≥ 0.5: a full circle ends where it starts; its start does not reach its end.)
+        return proj[kk].seg > j || (proj[kk].seg == j && proj[kk].u >= 0.5 &&
+                                    dist_axes(tr.pos[kk], segs[j].end) <= reach_tol);
       };
       while (k < n && !reached(k)) ++k;
       JointSpeed js;
