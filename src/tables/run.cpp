@@ -214,7 +214,8 @@ RunSummary run_tables(const TablePlan& plan,
     sum.duration_s = t_s;
     sum.end_ref = ref;
     if (all_done) break;
-    if (t_s >= plan.options.max_time_s) {
+    // A clock or constant-rate source always reaches the end; a position function may stall.
+    if (src.position && t_s >= plan.options.max_time_s) {
       sum.finished = false;
       sum.warnings.push_back(fmt::format(
           "stopped at t = {:.6g} s (max_time_s) before the tables ended: the reference stood at "

@@ -153,7 +153,9 @@ struct RunOptions {
   ReferenceSource reference = ReferenceSource::time_clock();
   Values values;
   std::uint32_t cyclic_repeats = 1;  // repetitions of a CYCLIC table without a count
-  double max_time_s = 3600;          // a run that has not ended by then stops (finished=false)
+  // With a master position function (which may stall): a run that has not ended by then stops
+  // with finished = false. Clock and constant-rate references always reach the end.
+  double max_time_s = 3600;
 };
 
 // ---------------------------------------------------------------------------------------------
