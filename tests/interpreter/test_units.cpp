@@ -1,0 +1,150 @@
+// Unit tests of the pieces: numbers, expressions, the reader's seeking, format_block, and
+// interpreter behaviours that the golden listings do not show (options, streaming memory).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "test_machine.hpp"
+
+namespace cncore::interp::test {
+namespace {
+
+double x_of(const std::string& expr) {
+  const MachineConfig m = test_machine();
+  Interpreter in(Interpreter::FromText{}, "G0 X" + expr + "\n", "u.ngc", m, Options{});
+  Block b;
+  EXPECT_TRUE(in.next(b));
+  return b.end[kX];
+}
+
+TEST(Numbers, LeadingAndTrailingDotsAndSigns) {
+  EXPECT_DOUBLE_EQ(x_of(".5"), 0.5);
+  EXPECT_DOUBLE_EQ(x_of("5."), 5.0);
+  EXPECT_DOUBLE_EQ(x_of("-0.25"), -0.25);
+  EXPECT_DOUBLE_EQ(x_of("+7"), 7.0);
+  EXPECT_DOUBLE_EQ(x_of("0012.5"), 12.5);
+  EXPECT_DOUBLE_EQ(x_of("123.456789"), 123.456789);
+}
+
+TEST(Expressions, TrigIsInDegrees) {
+  EXPECT_NEAR(x_of("[SIN[90]]"), 1.0, 1e-12);
+  EXPECT_NEAR(x_of("[ACOS[0.5]]"), 60.0, 1e-9);
+  EXPECT_NEAR(x_of("[ATAN[-1]/[0]]"), -90.0, 1e-9);
+}
+
+TEST(Expressions, PowerAndModEdgeCases) {
+  EXPECT_DOUBLE_EQ(x_of("[[-2] ** 3]"), -8.0);
+  EXPECT_DOUBLE_EQ(x_of("[7.5 MOD 2]"), 1.5);
+  EXPECT_DOUBLE_EQ(x_of("[-1 MOD 5]"), 4.0);
+}
+
+TEST(Options, ParamsAndVarsSeedTheProgram) {
+  const MachineConfig m = test_machine();
+  Options o;
+  o.params[7] = 12.5;
+  o.named_params["Depth"] = -3;
+  Interpreter in(Interpreter::FromText{}, "G0 X#7 Z#<depth>\n", "o.ngc", m, o);
+  Block b;
+  ASSERT_TRUE(in.next(b));
+  EXPECT_DOUBLE_EQ(b.end[kX], 12.5);
+  EXPECT_DOUBLE_EQ(b.end[kZ], -3.0);
+}
+
+TEST(Parameters, PositionAndOffsetNumbersFollowLinuxCnc) {
+  const MachineConfig m = test_machine();
+  const char* program =
+      "G10 L2 P2 X5\nG55 G0 X10 Y3\n"
+      "G0 X[#5420 + #5220]\n"       // program X 10 + system 2 → 12
+      "G0 Y[#5242 * 0 + #5241]\n";  // work offset X of G55 = 5 → program Y 5
+  Interpreter in(Interpreter::FromText{}, program, "p.ngc", m, Options{});
+  Block b;
+  ASSERT_TRUE(in.next(b));
+  EXPECT_DOUBLE_EQ(b.end[kX], 15.0);
+  ASSERT_TRUE(in.next(b));
+  EXPECT_DOUBLE_EQ(b.end[kX], 17.0);
+  ASSERT_TRUE(in.next(b));
+  EXPECT_DOUBLE_EQ(b.end[kY], 5.0);
+}
+
+TEST(FormatBlock, EnabledAxesOnlyAndNoNegativeZero) {
+  MachineConfig m = test_machine();
+  m.axes[kA].enabled = true;
+  m.axes[kA].rotary = true;
+  Block b;
+  b.kind = BlockKind::kLine;
+  b.line = 3;
+  b.end[kX] = -0.00001;
+  b.end[kA] = 90;
+  b.feed_mm_min = 1000;
+  EXPECT_EQ(format_block(b, m),
+            "N3 LINE from 0.0000 0.0000 0.0000 0.0000 to 0.0000 0.0000 0.0000 90.0000 F1000.000");
+  EXPECT_EQ(format_block(b), "N3 LINE from 0.0000 0.0000 0.0000 to 0.0000 0.0000 0.0000 F1000.000");
+}
+
+TEST(RotaryAxes, DegreesAreNeverConvertedByInchMode) {
+  MachineConfig m = test_machine();
+  m.axes[kA].enabled = true;
+  m.axes[kA].rotary = true;
+  m.axes[kA].min_mm = -360;
+  m.axes[kA].max_mm = 360;
+  Interpreter in(Interpreter::FromText{}, "G20 G1 X1 A90 F10\n", "r.ngc", m, Options{});
+  Block b;
+  ASSERT_TRUE(in.next(b));
+  EXPECT_DOUBLE_EQ(b.end[kX], 25.4);
+  EXPECT_DOUBLE_EQ(b.end[kA], 90.0);
+}
+
+TEST(Errors, MissingFileIsAnInputErrorNamingIt) {
+  const MachineConfig m = test_machine();
+  try {
+    Interpreter in("/nonexistent/dir/p.ngc", m, Options{});
+    FAIL() << "opened a missing file";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.formatted().find("/nonexistent/dir/p.ngc"), std::string::npos);
+  }
+}
+
+TEST(Errors, LineEndingsCrLfAndNoFinalNewline) {
+  const MachineConfig m = test_machine();
+  Interpreter in(Interpreter::FromText{}, "G0 X1\r\nG0 X2", "crlf.ngc", m, Options{});
+  Block b;
+  ASSERT_TRUE(in.next(b));
+  ASSERT_TRUE(in.next(b));
+  EXPECT_DOUBLE_EQ(b.end[kX], 2.0);
+  EXPECT_EQ(b.line, 2u);
+  EXPECT_FALSE(in.next(b));
+}
+
+// The file reader crosses chunk boundaries and seeks back for loops: a long program with a
+// loop at the end gives the same listing from a file as from memory.
+TEST(Streaming, FileAndMemoryAgreeAcrossChunksAndSeeks) {
+  std::string text = "G1 F1000\n";
+  for (int i = 0; i < 20000; ++i) {
+    text += "X" + std::to_string(i % 100) + ".5 Y" + std::to_string(i % 37) + " (padding text)\n";
+  }
+  text += "#1=0\no9 while [#1 LT 5]\n#1=[#1+1]\nG1 Z[-#1]\no9 endwhile\nM2\n";
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "cncore_interp_stream_test.ngc").string();
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << text;
+  }
+  const MachineConfig m = test_machine();
+  std::vector<std::string> from_file;
+  {
+    Interpreter in(path, m, Options{});
+    Block b;
+    while (in.next(b)) from_file.push_back(format_block(b, m));
+  }
+  std::filesystem::remove(path);
+  const std::vector<std::string> from_memory = listing(text, m);
+  EXPECT_EQ(from_file, from_memory);
+  ASSERT_GE(from_file.size(), 6u);
+  EXPECT_EQ(from_file[from_file.size() - 2].substr(0, 8), "N20005 L");
+}
+
+}  // namespace
+}  // namespace cncore::interp::test
