@@ -51,16 +51,16 @@ void SummaryObserver::on_block(const Block& b) {
     case BlockKind::kRapid:
       cap = machine_.rapid_mm_min;
       ++summary_.blocks;
-      pending_.push_back({b.line, cap, cap});
+      pending_.push_back({b.line, cap, cap, true});
       break;
     case BlockKind::kLine:
     case BlockKind::kArc:
       cap = machine_.max_feed_mm_min;
       ++summary_.blocks;
-      pending_.push_back({b.line, std::min(b.feed_mm_min, cap), cap});
+      pending_.push_back({b.line, std::min(b.feed_mm_min, cap), cap, false});
       break;
     case BlockKind::kDwell:
-      pending_.push_back({b.line, 0, 0});
+      pending_.push_back({b.line, 0, 0, false});
       break;
     case BlockKind::kAux:
       break;
@@ -189,6 +189,7 @@ void SummaryObserver::on_sample(const motion::Sample& s) {
         if (const Pending* b = current_block(s.line)) {
           const double target = std::min(b->feed_mm_min * s.override_pct / 100, b->cap_mm_min);
           group_.programmed_feed_mm_min = target;
+          group_.rapid = b->rapid;
           if (target > 0 && speed * 60 < target) group_.lost_s += dt * (1 - speed * 60 / target);
         }
       }
@@ -277,6 +278,7 @@ std::string summary_to_json(const Summary& s, const MachineConfig& machine) {
     o["average_feed_mm_min"] = p.average_feed_mm_min();
     o["programmed_feed_mm_min"] = p.programmed_feed_mm_min;
     o["visits"] = p.visits;
+    o["rapid"] = p.rapid;
     spots.push_back(o);
   }
   j["slowest_spots"] = spots;
@@ -316,9 +318,9 @@ std::string format_human_summary(const Summary& s, const MachineConfig& machine,
   } else {
     o += "slowest spots time lost against the programmed feed, worst first:\n";
     for (const SlowSpot& p : s.slowest) {
-      o += fmt::format("  line {:<6} {:.3f} s lost of {:.3f} s, average {:.0f} mm/min for {:.0f}",
+      o += fmt::format("  line {:<6} {:.3f} s lost of {:.3f} s, average {:.0f} of {:.0f} mm/min{}",
                        p.line, p.lost_s, p.time_s, p.average_feed_mm_min(),
-                       p.programmed_feed_mm_min);
+                       p.programmed_feed_mm_min, p.rapid ? " (G0)" : "");
       if (p.visits > 1) o += fmt::format(" ({} passes)", p.visits);
       o += '\n';
     }

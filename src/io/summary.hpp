@@ -24,6 +24,7 @@ struct SlowSpot {
   double length_mm = 0;               // distance travelled on the line
   double programmed_feed_mm_min = 0;  // F × override (rapid rate for G0), last seen
   std::uint64_t visits = 0;           // separate executions (loops, subroutines)
+  bool rapid = false;                 // a G0 move (target: the rapid rate)
   double average_feed_mm_min() const { return time_s > 0 ? length_mm / time_s * 60 : 0; }
 };
 
@@ -58,6 +59,7 @@ class SummaryObserver : public sim::SampleObserver {
     std::uint32_t line;
     double feed_mm_min;  // programmed, clamped to the machine's limit
     double cap_mm_min;   // the limit itself (max feed, or rapid rate for G0)
+    bool rapid;
   };
   const Pending* current_block(std::uint32_t line);
   void close_group();
