@@ -47,14 +47,18 @@ struct LimitCheck {
   std::set<std::tuple<std::size_t, std::int32_t, std::size_t, int>> seen;
 
   // Blames the row of point i, or of the first real row for the implicit start point.
-  void report(const Table& t, const std::vector<EffectivePoint>& pts, std::size_t i, std::size_t ti,
-              std::size_t axis, int kind, Diagnostic::Severity sev, const std::string& msg) {
+  // Returns false when this row was already reported for this axis and kind (a cyclic table's
+  // rows appear twice in the checked points). With `quiet` it only records the row.
+  bool report(const Table& t, const std::vector<EffectivePoint>& pts, std::size_t i, std::size_t ti,
+              std::size_t axis, int kind, Diagnostic::Severity sev, const std::string& msg,
+              bool quiet = false) {
     std::size_t j = i;
     while (j < pts.size() && pts[j].row < 0) ++j;
-    if (j == pts.size()) return;
+    if (j == pts.size()) return false;
     const Row& row = t.rows[static_cast<std::size_t>(pts[j].row)];
-    if (!seen.insert({ti, pts[j].row, axis, kind}).second) return;
-    out.push_back({sev, t.file, row.line, row.col, msg});
+    if (!seen.insert({ti, pts[j].row, axis, kind}).second) return false;
+    if (!quiet) out.push_back({sev, t.file, row.line, row.col, msg});
+    return true;
   }
 
   std::string seg_text(const Table& t, const std::vector<EffectivePoint>& pts, std::size_t i) {
@@ -122,6 +126,10 @@ struct LimitCheck {
       if (t.interp == Interp::kLinear) {
         // The seed's linear distribution changes the velocity in one step at a control point;
         // with no post-interpolation filter that step happens within one period.
+        // Listed for the first few rows of each axis, then counted (a long linear table would
+        // otherwise bury the errors under one warning per row).
+        constexpr int kListed = 5;
+        int listed = 0, more = 0;
         double step_s = std::max(m.post_filter_s, m.period_s);
         for (std::size_t i = 0; i < n; ++i) {
           double v_in = i == 0 ? 0 : slope(i - 1);
@@ -129,13 +137,22 @@ struct LimitCheck {
           double dv_s = std::abs(v_out - v_in) * rate;
           double a = dv_s / step_s;
           if (a > ac.max_accel_mm_s2 * (1 + 1e-9)) {
-            report(
+            bool quiet = listed >= kListed;
+            bool fresh = report(
                 t, pts, i, ti, axis, 3, Diagnostic::Severity::kWarning,
                 fmt::format("{} velocity steps by {:.6g} {}/s at this control point (LINEAR): "
                             "{:.6g} {}/s² over {:.6g} ms exceeds the axis limit {:.6g} {}/s² "
                             "(CUBIC keeps the velocity continuous)",
-                            letter, dv_s, unit, a, unit, step_s * 1000, ac.max_accel_mm_s2, unit));
+                            letter, dv_s, unit, a, unit, step_s * 1000, ac.max_accel_mm_s2, unit),
+                quiet);
+            if (fresh) (quiet ? more : listed) += 1;
           }
+        }
+        if (more > 0) {
+          out.push_back({Diagnostic::Severity::kWarning, t.file, t.ref_line, t.ref_col,
+                         fmt::format("{} velocity steps beyond the axis acceleration limit at {} "
+                                     "more control points of this table (not listed)",
+                                     letter, more)});
         }
       }
     }

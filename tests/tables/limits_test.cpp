@@ -57,6 +57,22 @@ TEST(Limits, LinearVelocityStepsAreWarningsAtTheirRows) {
   EXPECT_NE(w[0].message.find("100000 mm/s²"), std::string::npos) << w[0].message;
 }
 
+TEST(Limits, LinearStepWarningsAreListedForFiveRowsThenCounted) {
+  // A zig-zag of 12 rows: every control point steps the velocity.
+  std::string text = "REF TIME\nAXES X\n";
+  for (int i = 1; i <= 12; ++i) {
+    text += "L" + std::to_string(100 * i) + " X" + std::to_string(i % 2) + "\n";
+  }
+  std::vector<Table> t{parse_table(text, "z.tbl")};
+  TablePlan plan = plan_tables(t, test_machine(), {});
+  auto w = of(plan, Sev::kWarning);
+  ASSERT_EQ(w.size(), 6U);
+  EXPECT_EQ(w[0].line, 3U);
+  EXPECT_EQ(w[4].line, 7U);
+  EXPECT_EQ(w[5].line, 1U);
+  EXPECT_NE(w[5].message.find("at 7 more control points"), std::string::npos) << w[5].message;
+}
+
 TEST(Limits, CubicAccelerationViolationIsAnError) {
   // 0 → 10 mm in 100 ms, smooth: peak acceleration 6·10/0.1² = 6000 mm/s² (zero end tangents).
   std::vector<Table> t{parse_table("REF TIME\nAXES Z\nCUBIC\nL0 Z0\nL100 Z10\n", "a.tbl")};
