@@ -133,6 +133,47 @@ double corner_angle_rad(const PathSegment& a, const PathSegment& b) {
   return std::atan2(norm(cross(ta, tb)), dot(ta, tb));
 }
 
+bool make_segment(const Block& b, std::size_t block_index, PathSegment& out) {
+  if (b.kind != BlockKind::kRapid && b.kind != BlockKind::kLine && b.kind != BlockKind::kArc)
+    return false;
+  out = PathSegment{};
+  out.block_index = block_index;
+  out.line = b.line;
+  out.start = b.start;
+  out.end = b.end;
+  out.rapid = b.kind == BlockKind::kRapid;
+  out.feed_mm_min = b.feed_mm_min;
+  if (b.kind == BlockKind::kArc) {
+    out.arc = true;
+    out.n = unit(b.normal);
+    const Vec3 c = b.center;
+    Vec3 q0 = b.start.xyz() - c;
+    q0 = q0 - dot(q0, out.n) * out.n;
+    Vec3 q1 = b.end.xyz() - c;
+    q1 = q1 - dot(q1, out.n) * out.n;
+    out.center = b.start.xyz() - q0;  // centre in the start point's plane
+    out.r0 = norm(q0);
+    out.r1 = norm(q1);
+    out.e1 = unit(q0);
+    out.e2 = cross(out.n, out.e1);
+    double phi_end = std::atan2(dot(q1, out.e2), dot(q1, out.e1));
+    if (phi_end < 1e-12) phi_end += kTwoPi;  // start == end in the plane: a full circle
+    out.sweep_rad = phi_end + kTwoPi * b.turns;
+    out.rise_mm = dot(b.end.xyz() - b.start.xyz(), out.n);
+    if (out.r0 <= 0) {
+      // Degenerate arc (no radius): treat as a straight move.
+      out.arc = false;
+    } else {
+      const double r = 0.5 * (out.r0 + out.r1);
+      out.length_mm = std::hypot(r * out.sweep_rad, out.rise_mm);
+    }
+  }
+  if (!out.arc) out.length_mm = norm(b.end.xyz() - b.start.xyz());
+  double all_axes = 0;
+  for (std::size_t i = 0; i < kMaxAxes; ++i) all_axes += std::abs(b.end[i] - b.start[i]);
+  return out.arc || all_axes > 1e-12;
+}
+
 Path build_path(const std::vector<Block>& blocks) {
   Path path;
   bool have_start = false;
@@ -157,41 +198,7 @@ Path build_path(const std::vector<Block>& blocks) {
     }
     path.end = b.end;
     PathSegment seg;
-    seg.block_index = bi;
-    seg.line = b.line;
-    seg.start = b.start;
-    seg.end = b.end;
-    seg.rapid = b.kind == BlockKind::kRapid;
-    seg.feed_mm_min = b.feed_mm_min;
-    if (b.kind == BlockKind::kArc) {
-      seg.arc = true;
-      seg.n = unit(b.normal);
-      const Vec3 c = b.center;
-      Vec3 q0 = b.start.xyz() - c;
-      q0 = q0 - dot(q0, seg.n) * seg.n;
-      Vec3 q1 = b.end.xyz() - c;
-      q1 = q1 - dot(q1, seg.n) * seg.n;
-      seg.center = b.start.xyz() - q0;  // centre in the start point's plane
-      seg.r0 = norm(q0);
-      seg.r1 = norm(q1);
-      seg.e1 = unit(q0);
-      seg.e2 = cross(seg.n, seg.e1);
-      double phi_end = std::atan2(dot(q1, seg.e2), dot(q1, seg.e1));
-      if (phi_end < 1e-12) phi_end += kTwoPi;  // start == end in the plane: a full circle
-      seg.sweep_rad = phi_end + kTwoPi * b.turns;
-      seg.rise_mm = dot(b.end.xyz() - b.start.xyz(), seg.n);
-      if (seg.r0 <= 0) {
-        // Degenerate arc (no radius): treat as a straight move.
-        seg.arc = false;
-      } else {
-        const double r = 0.5 * (seg.r0 + seg.r1);
-        seg.length_mm = std::hypot(r * seg.sweep_rad, seg.rise_mm);
-      }
-    }
-    if (!seg.arc) seg.length_mm = norm(b.end.xyz() - b.start.xyz());
-    double all_axes = 0;
-    for (std::size_t i = 0; i < kMaxAxes; ++i) all_axes += std::abs(b.end[i] - b.start[i]);
-    const bool moves = seg.arc || all_axes > 1e-12;
+    const bool moves = make_segment(b, bi, seg);
     if (moves) {
       seg.s0_mm = path.length_mm;
       path.length_mm += seg.length_mm;

@@ -54,6 +54,10 @@ struct Path {
   bool empty() const { return segments.empty(); }
 };
 
+// The segment of one motion block (kRapid, kLine, kArc); false when the block does not move
+// (or is not a motion block). s0_mm and the stop flags are left for the caller.
+bool make_segment(const Block& block, std::size_t block_index, PathSegment& out);
+
 // Segments of every motion block with motion (zero-length blocks are dropped; their stop
 // flags move to the previous segment). Dwell and waiting aux blocks mark a stop at the end of
 // the previous segment; exact-stop blocks (G9, G61.1) at their own end; the last segment stops.
