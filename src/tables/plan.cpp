@@ -213,6 +213,7 @@ TablePlan plan_tables(std::vector<Table> tables, const MachineConfig& machine,
 
   for (std::size_t i = 0; i < kMaxAxes; ++i) plan.start_position[i] = machine.start_position[i];
   double start_ref = src.position ? src.position(0.0) : src.start;
+  plan.start_ref = start_ref;
   if (first.ref_kind == RefKind::kAxis) plan.start_position[first.ref_axis] = start_ref;
 
   // Effective tables (throws on references going backwards, undefined amounts) and the points

@@ -171,8 +171,9 @@ RunSummary run_tables(const TablePlan& plan,
   const bool master = plan.tables.front().ref_kind == RefKind::kAxis;
   const std::size_t master_axis = plan.tables.front().ref_axis;
 
-  double ref = src.position ? src.position(0.0) : src.start;
+  double ref = plan.start_ref;
   const double start_ref = ref;
+  double master_pos = start_ref;
   std::vector<Cursor> cursors;
   cursors.reserve(plan.tables.size());
   TableSample s;
@@ -190,13 +191,18 @@ RunSummary run_tables(const TablePlan& plan,
     if (k > 0) {
       s.m_codes.clear();
       // Forward-only reference: a master moving back holds the table where it is.
-      ref = src.position ? std::max(ref, src.position(t_s))
-                         : start_ref + static_cast<double>(k) * ref_per_cycle;
+      if (src.position) {
+        master_pos = src.position(t_s);  // once per cycle: the function may step a simulation
+        ref = std::max(ref, master_pos);
+      } else {
+        ref = start_ref + static_cast<double>(k) * ref_per_cycle;
+        master_pos = ref;
+      }
     }
     s.t_s = t_s;
     s.ref = ref;
     s.position = plan.start_position;
-    if (master) s.position[master_axis] = src.position ? src.position(t_s) : ref;
+    if (master) s.position[master_axis] = master_pos;
     bool all_done = true;
     for (std::size_t i = 0; i < cursors.size(); ++i) {
       cursors[i].advance(ref, t_s, s.m_codes);

@@ -128,6 +128,8 @@ struct ReferenceSource {
   double rate_per_s = 1000;
   // Master axis moved by someone else (e.g. a part program): its position per cycle. When set,
   // it replaces start + rate·t; the rate is then only used for the limit check (0: skip it).
+  // plan_tables calls it once with t = 0 (the start reference); run_tables then calls it once
+  // per cycle with increasing t from the second cycle on, so it may step a simulation.
   // The table follows the master forwards only: when the master goes back, the reference
   // holds at the highest value reached until the master passes it again.
   std::function<double(double t_s)> position;
@@ -190,6 +192,7 @@ struct TablePlan {
   std::vector<Diagnostic> diagnostics;
   double slow_factor = 1;  // ≥ 1: the reference runs 1/slow_factor as fast (slow_to_fit)
   AxisVec start_position;  // where the run starts (first points at the start reference)
+  double start_ref = 0;    // the reference value at t = 0
 
   bool has_errors() const;
 };
