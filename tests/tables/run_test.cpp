@@ -112,6 +112,21 @@ TEST(Cyclic, RepetitionCountFromOptionsAndShiftsPerRepetition) {
   EXPECT_NEAR(r.samples.back().t_s, 2.0, 1e-9);
 }
 
+TEST(Cyclic, LeadInIsNotRepeated) {
+  // The machine starts at X = 5; the cycle is the rows L500 … L1500 (period 1000 ms). The
+  // lead-in 0 … 500 ms brings X from 5 to 0 once.
+  MachineConfig m = test_machine();
+  m.start_position[kX] = 5;
+  TableRun r = run_texts({"REF TIME\nAXES X\nCYCLIC 2\nL500 X0\nL1000 X10\nL1500 X0\n"}, {}, m);
+  EXPECT_NEAR(r.samples[250].position[kX], 2.5, 1e-12);
+  EXPECT_NEAR(r.samples[500].position[kX], 0, 1e-12);
+  EXPECT_NEAR(r.samples[1000].position[kX], 10, 1e-12);
+  EXPECT_NEAR(r.samples[1500].position[kX], 0, 1e-12);
+  EXPECT_NEAR(r.samples[2000].position[kX], 10, 1e-12);
+  EXPECT_NEAR(r.samples.back().t_s, 2.5, 1e-12);
+  EXPECT_NEAR(r.samples.back().position[kX], 0, 1e-12);
+}
+
 TEST(Cubic, VelocityIsContinuousAtControlPoints) {
   const char* body = "AXES X\nL0 X0\nL1000 X50\nL2000 X150\nL2500 X150\nL3500 X100\nL4000 X100\n";
   TableRun lin = run_texts({std::string("REF TIME\nLINEAR\n") + body});
