@@ -14,6 +14,12 @@
 
 #include "program_gen.hpp"
 
+#ifdef CNCORE_GEN_HAS_INTERPRETER
+#include "config/machine_config.hpp"
+#include "core/error.hpp"
+#include "interpreter/interpreter.hpp"
+#endif
+
 namespace gen = cncore::testing::gen;
 
 int main(int argc, char** argv) {
@@ -62,6 +68,16 @@ int main(int argc, char** argv) {
   cam->add_option("--lines", lines)->check(CLI::Range(std::size_t{20}, std::size_t{1000000000}));
   cam->add_option("--seed", seed);
 
+#ifdef CNCORE_GEN_HAS_INTERPRETER
+  std::string program, machine_file;
+  int factor = 10;
+  auto* rf =
+      app.add_subcommand("refine", "the same path as PROGRAM, every block cut into k pieces");
+  rf->add_option("program", program, "part program (G-code)")->required();
+  rf->add_option("--factor", factor, "pieces per block")->check(CLI::Range(1, 100000));
+  rf->add_option("--machine", machine_file, "machine configuration (TOML)");
+#endif
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -86,6 +102,23 @@ int main(int argc, char** argv) {
   if (*ra) out << gen::raster_3d(width, height, stepover, spacing, feed);
   if (*rn) out << gen::random_path(seed, segments, min_len, max_len, max_turn, refine, feed);
   if (*cam) gen::cam_like(out, lines, seed);
+#ifdef CNCORE_GEN_HAS_INTERPRETER
+  if (*rf) {
+    try {
+      const cncore::MachineConfig machine = machine_file.empty()
+                                                ? cncore::default_machine_config()
+                                                : cncore::load_machine_config(machine_file);
+      cncore::interp::Interpreter in(program, machine, {});
+      gen::GcodeWriter w(out, factor);
+      cncore::Block b;
+      while (in.next(b)) w.add(b);
+      w.finish();
+    } catch (const cncore::InputError& e) {
+      std::fprintf(stderr, "%s\n", e.formatted().c_str());
+      return 1;
+    }
+  }
+#endif
   out.flush();
   if (!out) {
     std::fprintf(stderr, "cncore-gen: write failed\n");

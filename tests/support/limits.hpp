@@ -27,8 +27,9 @@ struct Limits {
   double end_tolerance_mm = 1e-9;    // P4: last position vs programmed end
   double stop_tolerance_mm = 1e-6;   // P4: landing on an intermediate stop point
   double margin = 0.005;             // relative numeric margin on every limit (0.5 %)
-  // Quantum of the positions (e.g. the CSV's decimals); gives the absolute slack of the finite
-  // differences: speed 2q/τ, acceleration 4q/τ², jerk 8q/τ³.
+  // Rounding q of the positions (the larger of this and Trajectory::position_resolution_mm,
+  // which the CSV loader sets from the decimals); gives the absolute slacks: positions 3q,
+  // speed 4q/τ, acceleration 8q/τ², jerk 16q/τ³.
   double position_resolution_mm = 1e-9;
   // P2 after a runtime override decrease: the speed may follow the limit that was in force up
   // to this long before (the acc/dec ramp). < 0: automatic, max(feed, rapid)/Amax (+ Amax/Jmax

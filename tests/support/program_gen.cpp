@@ -7,14 +7,16 @@
 #include <random>
 #include <sstream>
 
+#include "path_geometry.hpp"
+
 namespace cncore::testing::gen {
 namespace {
 
 // Fixed-point with up to 6 decimals, trailing zeros removed ("12.5", "-0.000001", "3").
-std::string num(double v) {
-  if (std::abs(v) < 5e-7) v = 0;
+std::string num(double v, int decimals = 6) {
+  if (std::abs(v) < 0.5 * std::pow(10.0, -decimals)) v = 0;
   char buf[64];
-  std::snprintf(buf, sizeof buf, "%.6f", v);
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
   std::string s(buf);
   while (!s.empty() && s.back() == '0') s.pop_back();
   if (!s.empty() && s.back() == '.') s.pop_back();
@@ -156,6 +158,87 @@ void cam_like(std::ostream& o, std::size_t lines, std::uint64_t seed) {
     ++row;
   }
   o << "G0 Z5\nM5\nM30\n";
+}
+
+GcodeWriter::GcodeWriter(std::ostream& out, int refine) : out_(out), refine_(std::max(refine, 1)) {
+  out_ << "(refined x" << refine_ << " by cncore-gen)\nG21 G90 G17 G94 G64\n";
+}
+
+void GcodeWriter::motion_word(const char* g, const AxisVec& end) {
+  out_ << g;
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    if (i >= kA) {
+      rotary_used_[i] = rotary_used_[i] || end[i] != 0;
+      if (!rotary_used_[i]) continue;  // rotary words only where used
+    }
+    out_ << ' ' << kAxisLetters[i] << num(end[i], 9);
+  }
+}
+
+void GcodeWriter::add(const Block& b) {
+  switch (b.kind) {
+    case BlockKind::kDwell:
+      out_ << "G4 P" << num(b.dwell_s, 9) << "\n";
+      return;
+    case BlockKind::kAux:
+      if (b.aux_waits) out_ << "G4 P0\n";
+      return;
+    default:
+      break;
+  }
+  PathSegment sg;
+  if (!make_segment(b, 0, sg)) return;
+  if (b.path_mode != mode_ || b.tolerance_mm != tolerance_) {
+    if (b.path_mode == PathMode::kExactPath) {
+      out_ << "G61\n";
+    } else if (b.path_mode == PathMode::kBlend) {
+      out_ << "G64";
+      if (b.tolerance_mm >= 0) out_ << " P" << num(b.tolerance_mm, 9);
+      out_ << "\n";
+    }
+    if (b.path_mode != PathMode::kExactStop) {
+      mode_ = b.path_mode;
+      tolerance_ = b.tolerance_mm;
+    }
+  }
+  if (b.kind != BlockKind::kRapid && b.feed_mm_min != feed_) {
+    feed_ = b.feed_mm_min;
+    out_ << "F" << num(feed_, 6) << "\n";
+  }
+  const bool stop = b.path_mode == PathMode::kExactStop;
+  if (!sg.arc) {
+    const char* g = b.kind == BlockKind::kRapid ? "G0" : "G1";
+    for (int k = 1; k <= refine_; ++k) {
+      motion_word(g, k == refine_ ? b.end : sg.point_at(static_cast<double>(k) / refine_));
+      out_ << (stop && k == refine_ ? " G9\n" : "\n");
+    }
+    return;
+  }
+  const int plane = std::abs(sg.n.z) > 0.5 ? 17 : (std::abs(sg.n.y) > 0.5 ? 18 : 19);
+  if (plane != plane_) {
+    plane_ = plane;
+    out_ << "G" << plane << "\n";
+  }
+  const bool ccw = (sg.n.x + sg.n.y + sg.n.z) > 0;
+  const int pieces = b.turns > 0 ? 1 : refine_;
+  for (int k = 1; k <= pieces; ++k) {
+    const double u0 = static_cast<double>(k - 1) / pieces;
+    const AxisVec from = sg.point_at(u0);
+    const AxisVec to = k == pieces ? b.end : sg.point_at(static_cast<double>(k) / pieces);
+    motion_word(ccw ? "G3" : "G2", to);
+    // Centre offsets from the piece's start, in-plane words only (I J / I K / J K).
+    const Vec3 c = sg.center + (sg.rise_mm * u0) * sg.n;
+    const Vec3 off = c - from.xyz();
+    if (plane != 19) out_ << " I" << num(off.x, 9);
+    if (plane != 18) out_ << " J" << num(off.y, 9);
+    if (plane != 17) out_ << " K" << num(off.z, 9);
+    if (b.turns > 0) out_ << " P" << (b.turns + 1);
+    out_ << (stop && k == pieces ? " G9\n" : "\n");
+  }
+}
+
+void GcodeWriter::finish() {
+  out_ << "M30\n";
 }
 
 }  // namespace cncore::testing::gen

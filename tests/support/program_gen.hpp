@@ -4,11 +4,14 @@
 // with M30. Deterministic: the same arguments (and seed) give the same text.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <ostream>
 #include <string>
+
+#include "core/block.hpp"
 
 namespace cncore::testing::gen {
 
@@ -38,5 +41,26 @@ std::string random_path(std::uint64_t seed, int segments, double min_len_mm = 0.
 // retracts between passes, feed words, a few arcs), written straight to `out` so that a million
 // lines do not have to be held in memory.
 void cam_like(std::ostream& out, std::size_t lines, std::uint64_t seed = 1);
+
+// Writes interpreted Blocks back as G-code (machine coordinates, mm, G90, no offsets), every
+// motion block cut into `refine` equal pieces (lines: equal lengths; arcs: equal angles; multi-turn
+// arcs stay whole). Exact stops become G9, dwells G4, waiting M-codes G4 P0; feeds, G61/G64 kept.
+// The result runs the same path as the original, with `refine`× as many blocks (spec 01 P7).
+class GcodeWriter {
+ public:
+  GcodeWriter(std::ostream& out, int refine);
+  void add(const Block& block);
+  void finish();  // writes M30
+
+ private:
+  void motion_word(const char* g, const AxisVec& end);
+  std::ostream& out_;
+  int refine_;
+  double feed_ = -1;
+  int plane_ = 17;
+  PathMode mode_ = PathMode::kBlend;
+  double tolerance_ = -1;
+  std::array<bool, kMaxAxes> rotary_used_{};  // once written, a rotary axis is always written
+};
 
 }  // namespace cncore::testing::gen

@@ -2,6 +2,7 @@
 
 #include <fast_float/fast_float.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -103,6 +104,7 @@ Trajectory load_trajectory_csv(const std::string& path) {
   tr.reserve(all.size() / 40);
   std::string_view row;
   std::array<double, kNumCols> v{};
+  int max_decimals = 0;
   while (next_line(row)) {
     if (trim(row).empty()) continue;
     v = {};
@@ -115,6 +117,23 @@ Trajectory load_trajectory_csv(const std::string& path) {
       const char* field_end = p;
       while (field_end < end && *field_end != ',') ++field_end;
       if (map[c] >= 0) {
+        const int col = map[c];
+        if (col >= kAx0 && col < kAx0 + 6) {
+          // Count the decimals of axis values: the resolution of the file.
+          const char* dot = p;
+          while (dot < field_end && *dot != '.' && *dot != 'e' && *dot != 'E') ++dot;
+          if (dot < field_end && *dot == '.') {
+            const char* e = dot + 1;
+            while (e < field_end && *e >= '0' && *e <= '9') ++e;
+            const bool exponent = e < field_end && (*e == 'e' || *e == 'E');
+            if (!exponent)
+              max_decimals = std::max(max_decimals, static_cast<int>(e - dot - 1));
+            else
+              max_decimals = 17;
+          } else if (dot < field_end) {
+            max_decimals = 17;  // exponent form: treat as exact
+          }
+        }
         double x = 0;
         const char* q = p;
         if (q < field_end && *q == '+') ++q;
@@ -145,6 +164,7 @@ Trajectory load_trajectory_csv(const std::string& path) {
     tr.add(v[kT], static_cast<std::uint32_t>(std::isnan(v[kLine]) ? 0 : v[kLine]), pos, v[kFeed],
            v[kOverride], v[kCorrection]);
   }
+  tr.position_resolution_mm = max_decimals >= 15 ? 0.0 : 0.5 * std::pow(10.0, -max_decimals);
   if (tr.size() >= 2) {
     // Period from the mean spacing of the time column, rounded to the ns (CSV decimals).
     const double mean = (tr.t_s.back() - tr.t_s.front()) / static_cast<double>(tr.size() - 1);

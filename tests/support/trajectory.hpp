@@ -13,6 +13,9 @@ namespace cncore::testing {
 
 struct Trajectory {
   double period_s = 0.001;  // τ; the loader takes it from the t column
+  // Rounding of the positions: 0 for exact in-memory samples; the loader sets half a unit of the
+  // last decimal printed (5e-7 mm for 6 decimals). The checker adds it to its slacks.
+  double position_resolution_mm = 0;
   std::vector<double> t_s;
   std::vector<std::uint32_t> line;
   std::vector<AxisVec> pos;  // axis set-points (mm, degrees for A B C)

@@ -103,10 +103,16 @@ CheckReport check_trajectory(const Trajectory& tr, const Path& path, const Limit
   rep.duration_s = tr.t_s.back() - tr.t_s.front();
   const double tau = lim.period_s > 0 ? lim.period_s : tr.period_s;
   const double m1 = 1 + lim.margin;
-  const double q = lim.position_resolution_mm;
-  const double eps_v = 2 * q / tau;
-  const double eps_a = 4 * q / (tau * tau);
-  const double eps_j = 8 * q / (tau * tau * tau);
+  // Rounding of the data (CSV decimals): every slack grows with it, and so do the tolerances
+  // that are below it (an end point printed with 6 decimals cannot be checked to 1e-9 mm).
+  const double q = std::max(lim.position_resolution_mm, tr.position_resolution_mm);
+  // Each coordinate is off by up to q; a distance over 3 axes by up to √3·q < 3q, a first
+  // difference by 2·(3q)... kept simple and generous: positions 3q, speed 4q/τ, acceleration
+  // 8q/τ², jerk 16q/τ³.
+  const double eps_p = 3 * q;
+  const double eps_v = 4 * q / tau;
+  const double eps_a = 8 * q / (tau * tau);
+  const double eps_j = 16 * q / (tau * tau * tau);
   const double amax = lim.max_accel_mm_s2;
   const auto& segs = path.segments;
   const std::size_t nseg = segs.size();
@@ -192,7 +198,7 @@ CheckReport check_trajectory(const Trajectory& tr, const Path& path, const Limit
   if (nseg > 0) {
     for (std::size_t k = 0; k < n; ++k) {
       rep.max_path_error_mm = std::max(rep.max_path_error_mm, proj[k].dist);
-      if (proj[k].dist > lim.path_tolerance_mm * m1 + q)
+      if (proj[k].dist > lim.path_tolerance_mm * m1 + eps_p)
         add(Property::kPath, k, proj[k].dist, lim.path_tolerance_mm);
     }
   }
@@ -247,7 +253,8 @@ CheckReport check_trajectory(const Trajectory& tr, const Path& path, const Limit
       // it (within the snap distance) or on a later segment.
       const bool is_last = j + 1 == nseg;
       const double reach_tol =
-          segs[j].stop_after ? (is_last ? lim.end_tolerance_mm : lim.stop_tolerance_mm) + q : snap;
+          segs[j].stop_after ? (is_last ? lim.end_tolerance_mm : lim.stop_tolerance_mm) + eps_p
+                             : snap;
       auto reached = [&](std::size_t kk) {
         // (u ≥ 0.5: a full circle ends where it starts; its start does not reach its end.)
         return proj[kk].seg > j || (proj[kk].seg == j && proj[kk].u >= 0.5 &&
@@ -275,14 +282,14 @@ CheckReport check_trajectory(const Trajectory& tr, const Path& path, const Limit
         const bool last = j + 1 == nseg;
         const double tol = last ? lim.end_tolerance_mm : lim.stop_tolerance_mm;
         const double err = dist_axes(tr.pos[k], segs[j].end);
-        if (err > tol + q) {
+        if (err > tol + eps_p) {
           add(Property::kStopPoint, k, err, tol);  // jumped over the stop point
         } else {
           if (js.speed_mm_s > js.vg_mm_s * m1 + eps_v)
             add(Property::kEndSpeed, k, js.speed_mm_s, js.vg_mm_s);
           if (segs[j].dwell_after_s > 0) {
             std::size_t e = k;
-            while (e + 1 < n && dist_axes(tr.pos[e + 1], segs[j].end) <= tol + q) ++e;
+            while (e + 1 < n && dist_axes(tr.pos[e + 1], segs[j].end) <= tol + eps_p) ++e;
             const double stayed = tr.t_s[e] - tr.t_s[k];
             if (stayed < segs[j].dwell_after_s - tau - 1e-9)
               add(Property::kStopPoint, k, stayed, segs[j].dwell_after_s);
@@ -295,7 +302,7 @@ CheckReport check_trajectory(const Trajectory& tr, const Path& path, const Limit
     }
     rep.end_error_mm = dist_axes(tr.pos.back(), path.end);
     rep.end_speed_mm_s = v[n - 1];
-    if (rep.end_error_mm > lim.end_tolerance_mm + q)
+    if (rep.end_error_mm > lim.end_tolerance_mm + eps_p)
       add(Property::kEndPoint, n - 1, rep.end_error_mm, lim.end_tolerance_mm);
     const bool end_checked = !rep.joints.empty() && rep.joints.back().speed_mm_s >= 0;
     if (!end_checked && rep.end_speed_mm_s > amax * tau * m1 + eps_v)

@@ -20,7 +20,9 @@
 // - Jerk: tangential (a_t[k+1] − a_t[k])/τ is checked against max_jerk_mm_s3; the resultant
 //   third difference |Δ³P|/τ³ is only reported (sharp corners make it unbounded by design).
 //
-// Rules (each limit gets ×(1 + margin) plus the resolution slack of Limits):
+// Rules (each limit gets ×(1 + margin) plus the resolution slack, see
+// Limits::position_resolution_mm; a CSV with 6 decimals has q = 5e-7 mm, so its end point is
+// checked to 1e-9 + 1.5e-6 mm — check in-memory samples for the strict 1e-9):
 // - P1: dist[k] ≤ path_tolerance_mm for every sample.
 // - P2 speed: v[k] ≤ limit at sample k, where sample k lies in segment S:
 //     limit = min(Vkind, √(R·Amax) on arcs, F(S)·f[k]), Vkind = max feed or rapid rate,
