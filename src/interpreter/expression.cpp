@@ -98,6 +98,14 @@ Op peek_op(const std::string& t, std::size_t pos, std::size_t& len) {
 }  // namespace
 
 double Evaluator::real_value(std::size_t& pos) {
+  const std::size_t start = pos;
+  const double v = raw_value(pos);
+  // inf and NaN (EXP[1000], [EXP[1000] - EXP[1000]]) would slip past every later check.
+  if (!std::isfinite(v)) fail(start, "value is not a finite number");
+  return v;
+}
+
+double Evaluator::raw_value(std::size_t& pos) {
   if (pos >= t_.size()) fail(pos, "missing value at the end of the line");
   const char c = t_[pos];
   if (c == '[') return expression(pos);
@@ -132,8 +140,7 @@ ParamRef Evaluator::param_ref(std::size_t& pos) {
   const double index = real_value(pos);  // a number, [expr] or #n (indirection)
   --depth_;
   const double rounded = std::nearbyint(index);
-  if (std::fabs(index - rounded) > 1e-4 || !Parameters::valid_number(static_cast<int>(rounded)) ||
-      !std::isfinite(index)) {
+  if (std::fabs(index - rounded) > 1e-4 || rounded < 1 || rounded > Parameters::kMaxNumbered) {
     ctx_.fail(ref.col,
               "parameter number out of range (1…" + std::to_string(Parameters::kMaxNumbered) + ")");
   }

@@ -38,6 +38,7 @@ class Evaluator {
   double read(const ParamRef& ref) const;
 
  private:
+  double raw_value(std::size_t& pos);   // real_value without the finiteness check
   double expression(std::size_t& pos);  // t[pos] == '['
   double binary(std::size_t& pos, int level);
   double operand(std::size_t& pos);

@@ -390,7 +390,9 @@ void Interpreter::Impl::call_fanuc(std::uint32_t col) {
   const Words& w = words_;
   if (!w.has('p')) fail(col, "M98 without P (subprogram number)");
   const double p = w['p'].value;
-  if (p < 0 || p != std::floor(p)) fail(w['p'].col, "M98 P must be a program number");
+  if (p < 0 || p != std::floor(p) || p > 1e9) {
+    fail(w['p'].col, "M98 P must be a program number");
+  }
   double count = 1;
   if (w.has('l')) {
     count = w['l'].value;

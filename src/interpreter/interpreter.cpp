@@ -86,9 +86,9 @@ bool Interpreter::Impl::next(Block& out) {
 }
 
 double Interpreter::Impl::offset(std::size_t axis) const {
-  double off = params_.numbered(work_param(modal_.coord_system, axis));
-  if (params_.numbered(kParamG92Applied) != 0)
-    off += params_.numbered(kParamG92 + static_cast<int>(axis));
+  double off = params_.stored(work_param(modal_.coord_system, axis));
+  if (params_.stored(kParamG92Applied) != 0)
+    off += params_.stored(kParamG92 + static_cast<int>(axis));
   return off;
 }
 
@@ -190,9 +190,10 @@ void Interpreter::Impl::parse_words(std::size_t pos) {
       case 'm': {
         ++pos;
         const double v = eval.real_value(pos);
+        if (v < 0 || v > 10000) fail(col, fmt::format("unknown {} code {}{}", upper, upper, v));
         const double v10 = v * 10;
         const int code10 = static_cast<int>(std::lround(v10));
-        if (std::fabs(v10 - code10) > 1e-6 || v < 0 || v > 10000) {
+        if (std::fabs(v10 - code10) > 1e-6) {
           fail(col, fmt::format("unknown {} code {}{}", upper, upper, v));
         }
         const bool is_g = c == 'g';
@@ -313,7 +314,9 @@ void Interpreter::Impl::execute_words() {
   int selected_tool = modal_.tool;
   if (w.has('t')) {
     const double tv = w['t'].value;
-    if (tv < 0 || tv != std::floor(tv)) fail(w['t'].col, "T must be a non-negative integer");
+    if (tv < 0 || tv != std::floor(tv) || tv > 1e9) {
+      fail(w['t'].col, "T must be a tool number (a non-negative integer)");
+    }
     selected_tool = static_cast<int>(tv);
     emit_aux('T', tv, false);
   }

@@ -11,13 +11,17 @@ void ErrorContext::fail(std::uint32_t col, const std::string& message) const {
 }
 
 void normalize_line(std::string_view raw, NormLine& out, const ErrorContext& ctx) {
-  out.text.clear();
-  out.cols.clear();
   out.block_delete = false;
   out.percent = false;
+  // Hot path: write through raw pointers into buffers sized for the whole line, then trim.
+  const std::size_t n = raw.size();
+  out.text.resize(n);
+  out.cols.resize(n + 1);
+  char* text = out.text.data();
+  std::uint32_t* cols = out.cols.data();
+  std::size_t len = 0;
 
   std::size_t i = 0;
-  const std::size_t n = raw.size();
   // Leading blanks, then an optional block-delete slash (only as the first character).
   while (i < n && (raw[i] == ' ' || raw[i] == '\t')) ++i;
   if (i < n && raw[i] == '/') {
@@ -41,11 +45,14 @@ void normalize_line(std::string_view raw, NormLine& out, const ErrorContext& ctx
       continue;
     }
     if (c == ')') ctx.fail(static_cast<std::uint32_t>(i + 1), "')' without '(' (comment)");
-    out.text.push_back(c >= 'A' && c <= 'Z' ? static_cast<char>(c - 'A' + 'a') : c);
-    out.cols.push_back(static_cast<std::uint32_t>(i + 1));
+    text[len] = (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c;
+    cols[len] = static_cast<std::uint32_t>(i + 1);
+    ++len;
   }
-  out.cols.push_back(static_cast<std::uint32_t>(n + 1));
-  if (!out.block_delete && out.text == "%") out.percent = true;
+  cols[len] = static_cast<std::uint32_t>(n + 1);
+  out.text.resize(len);
+  out.cols.resize(len + 1);
+  if (!out.block_delete && len == 1 && text[0] == '%') out.percent = true;
 }
 
 bool scan_number(const NormLine& line, std::size_t& pos, double& value, const ErrorContext& ctx) {

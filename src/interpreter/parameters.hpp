@@ -40,6 +40,8 @@ class Parameters {
   void set_live(const LiveParameters* live) { live_ = live; }
 
   double numbered(int n) const;
+  // The stored value, bypassing the live values (for parameters that are never live).
+  double stored(int n) const { return numbered_[static_cast<std::size_t>(n)]; }
   void set_numbered(int n, double value) { numbered_[static_cast<std::size_t>(n)] = value; }
   static bool valid_number(int n) { return n >= 1 && n <= kMaxNumbered; }
 
