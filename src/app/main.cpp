@@ -174,11 +174,25 @@ int command_run(const RunArgs& a) {
   const MachineConfig machine = machine_from(a.machine);
   sim::RunOptions options;
   options.kernel.mode = a.mode == "stop" ? motion::Mode::kStop : motion::Mode::kLookahead;
+  options.kernel.bound_resultant_accel = machine.bound_resultant_accel;
   if (a.override_pct) {
     options.kernel.override_pct =
         override_value("--override", fmt::format("{}", *a.override_pct), machine.max_override_pct);
   }
   options.override_steps = parse_override_steps(a.override_at, machine.max_override_pct);
+  {
+    // With the override at 0 for good the machine never reaches the end: refuse to start.
+    double last = options.kernel.override_pct, last_t = -1;
+    for (const auto& [t, pct] : options.override_steps) {
+      if (t >= last_t) {
+        last = pct;
+        last_t = t;
+      }
+    }
+    if (last <= 0) {
+      throw UsageError("the feed override ends at 0 %: the program would never finish");
+    }
+  }
   options.interpreter = interpreter_options(a.vars, a.params);
   require_readable(a.program);
 
@@ -228,7 +242,7 @@ int command_check(const CheckArgs& a) {
       ++motion;
     }
     if (a.blocks) {
-      out += interp::format_block(b);
+      out += interp::format_block(b, machine);
       out += '\n';
       if (out.size() > (1 << 16)) {
         std::fwrite(out.data(), 1, out.size(), stdout);

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -89,6 +90,11 @@ class Reader {
     fail(key.source(), fmt::format("{} must be a number", name));
   }
 
+  bool boolean(const toml::key& key, const toml::node& node, const std::string& name) const {
+    if (const auto* b = node.as_boolean()) return b->get();
+    fail(key.source(), fmt::format("{} must be true or false", name));
+  }
+
   std::int64_t integer(const toml::key& key, const toml::node& node,
                        const std::string& name) const {
     if (const auto* i = node.as_integer()) return i->get();
@@ -154,6 +160,8 @@ void read_motion(const Reader& r, const toml::table& t, MachineConfig& c) {
       c.lookahead_blocks = static_cast<std::uint32_t>(r.integer_in(key, node, name, 2, 1000000));
     } else if (k == "max_override_pct") {
       c.max_override_pct = r.number_in(key, node, name, 100, false, 1000, "%");
+    } else if (k == "bound_resultant_accel") {
+      c.bound_resultant_accel = r.boolean(key, node, name);
     } else {
       r.unknown(key, name);
     }
@@ -333,21 +341,21 @@ std::string machine_config_to_toml(const MachineConfig& c) {
   line("period_s = " + num(c.period_s), "interpolation period τ, s (0 < τ <= 0.1)");
   line("max_feed_mm_min = " + num(c.max_feed_mm_min),
        "Vmax: highest path feed; higher F words are clamped to it");
-  line("rapid_mm_min = " + num(c.rapid_mm_min), "G0 path speed, mm/min");
+  line("rapid_mm_min = " + num(c.rapid_mm_min), "G0 path speed, mm/min (see below)");
   line("max_accel_mm_s2 = " + num(c.max_accel_mm_s2),
        "Amax: tangential and normal path acceleration, mm/s²");
   // Written from this configuration's own values, so an edited file documents itself.
-  const double t_feed_s = c.max_feed_mm_min / 60 / c.max_accel_mm_s2;
-  const double t_rapid_s = c.rapid_mm_min / 60 / c.max_accel_mm_s2;
+  const double t_s = c.max_feed_mm_min / 60 / c.max_accel_mm_s2;
+  const long t_cycles = static_cast<long>(std::ceil(t_s / c.period_s - 1e-9));
+  const double g0_mm_min =
+      std::min(c.rapid_mm_min, c.max_accel_mm_s2 * static_cast<double>(t_cycles) * c.period_s * 60);
   o += fmt::format(
       "# The moving-average acc/dec filter follows from the limits: its time constant is\n"
       "# T = Vmax / Amax (s), i.e. ceil(Vmax / (Amax·τ)) cycles, so a step 0 → Vmax becomes a\n"
-      "# ramp of slope Amax. Here: feed T = {:.1f} ms ({} cycles), rapid T = {:.1f} ms ({} "
-      "cycles).\n"
-      "# Arcs of radius R pass at Vb = min(Vmax, sqrt(R·Amax)); a corner turning by θ at\n"
-      "# Amax·τ / (2·sin(θ/2)).\n",
-      t_feed_s * 1000, static_cast<long>(std::ceil(t_feed_s / c.period_s - 1e-9)), t_rapid_s * 1000,
-      static_cast<long>(std::ceil(t_rapid_s / c.period_s - 1e-9)));
+      "# ramp of slope Amax. Here T = {:.1f} ms ({} cycles). G0 uses the same filter, so it runs\n"
+      "# at min(rapid, Amax·T) = {:.0f} mm/min. Arcs of radius R pass at\n"
+      "# Vb = min(Vmax, sqrt(R·Amax)); a corner turning by θ at Amax·τ / (2·sin(θ/2)).\n",
+      t_s * 1000, t_cycles, g0_mm_min);
   line("max_jerk_mm_s3 = " + num(c.max_jerk_mm_s3),
        "Jmax, mm/s³; 0 = no jerk stage, else a second filter T2 = Amax / Jmax");
   line("contour_tolerance_mm = " + num(c.contour_tolerance_mm),
@@ -358,6 +366,8 @@ std::string machine_config_to_toml(const MachineConfig& c) {
        "capacity of the execution-data (look-ahead) buffer, blocks (2 … 1000000)");
   line("max_override_pct = " + num(c.max_override_pct),
        "highest feed override accepted, % (100 … 1000)");
+  line(fmt::format("bound_resultant_accel = {}", c.bound_resultant_accel),
+       "arcs: true = tangential+normal resultant <= Amax; false = each <= Amax (seed)");
 
   o += "\n[interpreter]\n";
   line("max_loop_iterations = " + std::to_string(c.max_loop_iterations),

@@ -35,6 +35,9 @@ struct MachineConfig {
   double post_filter_s = 0;                // per-axis post-interpolation moving average; 0: off
   std::uint32_t lookahead_blocks = 10000;  // capacity of the execution-data buffer
   double max_override_pct = 200;           // highest feed override accepted
+  // On arcs, bound the resultant of tangential and normal acceleration by Amax (true), or each
+  // of them separately (false, the seed's way: the resultant may reach √2·Amax).
+  bool bound_resultant_accel = false;
   std::array<double, kMaxAxes> start_position{};  // position at program start ([axes.x] start_mm)
 
   // [axes.x] ...

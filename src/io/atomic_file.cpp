@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <vector>
@@ -14,9 +15,59 @@
 namespace cncore::io {
 
 namespace {
+
 std::string errno_text() {
   return std::strerror(errno);
 }
+
+// Temporaries still open, so that an interrupted run (Ctrl-C, SIGTERM from a timeout) removes
+// them too: the signal handler unlinks them (unlink is async-signal-safe) and then dies of the
+// signal as it would have. Fixed storage: nothing to allocate in the handler.
+constexpr int kMaxTemps = 16;
+constexpr std::size_t kMaxPath = 4096;
+char g_temp_paths[kMaxTemps][kMaxPath];
+volatile std::sig_atomic_t g_temp_used[kMaxTemps];
+
+extern "C" void remove_temps_and_die(int sig) {
+  for (int i = 0; i < kMaxTemps; ++i) {
+    if (g_temp_used[i]) ::unlink(g_temp_paths[i]);
+  }
+  ::signal(sig, SIG_DFL);
+  ::raise(sig);
+}
+
+void install_handlers_once() {
+  static bool installed = false;
+  if (installed) return;
+  installed = true;
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction old {};
+    ::sigaction(sig, nullptr, &old);
+    if (old.sa_handler != SIG_DFL) continue;  // ignored or handled elsewhere: leave it
+    struct sigaction sa {};
+    sa.sa_handler = remove_temps_and_die;
+    sigemptyset(&sa.sa_mask);
+    ::sigaction(sig, &sa, nullptr);
+  }
+}
+
+int register_temp(const std::string& path) {
+  if (path.size() >= kMaxPath) return -1;
+  install_handlers_once();
+  for (int i = 0; i < kMaxTemps; ++i) {
+    if (!g_temp_used[i]) {
+      std::memcpy(g_temp_paths[i], path.c_str(), path.size() + 1);
+      g_temp_used[i] = 1;
+      return i;
+    }
+  }
+  return -1;
+}
+
+void unregister_temp(int slot) {
+  if (slot >= 0) g_temp_used[slot] = 0;
+}
+
 }  // namespace
 
 AtomicOutputFile::AtomicOutputFile(std::string path) : path_(std::move(path)) {
@@ -26,6 +77,7 @@ AtomicOutputFile::AtomicOutputFile(std::string path) : path_(std::move(path)) {
   fd_ = ::mkstemp(name.data());
   if (fd_ < 0) throw InputError(path_, 0, 0, "cannot create output file: " + errno_text());
   temp_ = name.data();
+  signal_slot_ = register_temp(temp_);
   // mkstemp creates mode 0600; give the result the usual mode 0666 minus the umask.
   const mode_t mask = ::umask(0);
   ::umask(mask);
@@ -45,6 +97,8 @@ void AtomicOutputFile::discard() noexcept {
     ::unlink(temp_.c_str());
     temp_.clear();
   }
+  unregister_temp(signal_slot_);
+  signal_slot_ = -1;
 }
 
 void AtomicOutputFile::write(std::string_view data) {
@@ -75,6 +129,8 @@ void AtomicOutputFile::commit() {
     throw InputError(path_, 0, 0, "cannot rename output file into place: " + why);
   }
   temp_.clear();
+  unregister_temp(signal_slot_);
+  signal_slot_ = -1;
   committed_ = true;
 }
 

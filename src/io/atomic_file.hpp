@@ -1,7 +1,9 @@
 // An output file that appears complete or not at all: data goes to FILE.tmp-XXXXXX in the same
 // directory (so the final rename stays on one file system and is atomic), commit() renames it
 // over FILE, and destruction without commit removes the temporary. A failed run therefore
-// leaves neither a half-written file nor a temporary behind.
+// leaves neither a half-written file nor a temporary behind, even when it is interrupted by
+// SIGINT, SIGTERM or SIGHUP (a handler removes the open temporaries, then the process dies of
+// the signal as usual).
 #pragma once
 
 #include <string>
@@ -33,6 +35,7 @@ class AtomicOutputFile {
   std::string path_;
   std::string temp_;
   int fd_ = -1;
+  int signal_slot_ = -1;  // entry in the list the SIGINT/SIGTERM handler cleans up
   bool committed_ = false;
 };
 

@@ -27,7 +27,24 @@ RunCounts run_program(const std::string& program_path, const MachineConfig& mach
   std::stable_sort(steps.begin(), steps.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
 
+  // Stall watchdog: a kernel that stops moving for good (a bug) would hang the run forever.
+  // Standing still is legitimate during a dwell and while the override is 0, so the limit is
+  // the longest dwell seen so far plus 60 s of simulated time.
+  double override_now = options.kernel.override_pct;
+  double longest_dwell_s = 0;
+  std::uint64_t still_cycles = 0;
+  AxisVec last_position;
   auto deliver = [&](const motion::Sample& s) {
+    if (counts.cycles > 0 && s.position == last_position && override_now > 0) {
+      if (++still_cycles * machine.period_s > longest_dwell_s + 60) {
+        throw std::runtime_error("motion kernel stalled: no motion for " +
+                                 std::to_string(still_cycles) + " cycles at line " +
+                                 std::to_string(s.line) + ", t = " + std::to_string(s.t_s) + " s");
+      }
+    } else {
+      still_cycles = 0;
+    }
+    last_position = s.position;
     ++counts.cycles;
     for (SampleObserver* o : observers) o->on_sample(s);
   };
@@ -37,6 +54,7 @@ RunCounts run_program(const std::string& program_path, const MachineConfig& mach
     const double t_next = static_cast<double>(counts.cycles) * machine.period_s;
     while (next_step < steps.size() && t_next >= steps[next_step].first - 1e-9) {
       kernel.set_override(steps[next_step].second);
+      override_now = steps[next_step].second;
       ++next_step;
     }
     if (!kernel.step(sample)) return false;
@@ -68,6 +86,8 @@ RunCounts run_program(const std::string& program_path, const MachineConfig& mach
         break;
       }
       if (is_motion(block)) ++counts.blocks;
+      if (block.kind == BlockKind::kDwell)
+        longest_dwell_s = std::max(longest_dwell_s, block.dwell_s);
       for (SampleObserver* o : observers) o->on_block(block);
       kernel.push(block);
     }

@@ -203,6 +203,25 @@ TEST_F(Cli, ErrorAtTheLastLineLeavesNoOutputAndNoTemporary) {
   EXPECT_EQ(list_dir(dir_), std::vector<std::string>{"late.ngc"});
 }
 
+TEST_F(Cli, InterruptedRunLeavesNoTemporary) {
+  // Stop mode on many short segments runs long enough to be killed mid-way.
+  std::string program = "G21 G90 G17 F6000\n";
+  for (int i = 0; i < 20000; ++i) program += i % 2 ? "G1 X0\n" : "G1 X1\n";
+  program += "M30\n";
+  write(dir_ / "long.ngc", program);
+  for (const char* sig : {"TERM", "HUP"}) {  // a background job ignores SIGINT
+    const std::string cmd = "cd " + quote(dir_.string()) + " && (" + quote(CNCORE_BIN) +
+                            " run long.ngc --mode stop --trajectory t.csv --summary s.json"
+                            " >/dev/null 2>&1 & pid=$!; sleep 0.3; kill -" +
+                            sig + " $pid; wait $pid)";
+    const int status = std::system(cmd.c_str());
+    // The shell reports death by signal as 128 + signal number.
+    const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    EXPECT_GT(code, 128) << sig;
+    EXPECT_EQ(list_dir(dir_), std::vector<std::string>{"long.ngc"}) << sig;
+  }
+}
+
 TEST_F(Cli, UnwritableOutputIsExitOneAndLeavesNothing) {
   const Result r =
       run("run " + example("seed-line-arc-line.ngc") + " --trajectory no/such/dir/t.csv");

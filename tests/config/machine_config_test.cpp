@@ -58,6 +58,7 @@ TEST(MachineConfig, PrintedCustomParsesBackEqual) {
   c.post_filter_s = 0.008;
   c.lookahead_blocks = 77;
   c.max_override_pct = 150;
+  c.bound_resultant_accel = true;
   c.max_loop_iterations = 123456789012;
   c.max_call_depth = 9;
   c.axes[kZ].enabled = false;
@@ -85,7 +86,7 @@ TEST(MachineConfig, EveryPrintedKeyHasAComment) {
     }
     pos = end + 1;
   }
-  EXPECT_GE(keys, 27);  // name + 9 motion + 2 interpreter + 3 axes × 5
+  EXPECT_GE(keys, 28);  // name + 10 motion + 2 interpreter + 3 axes × 5
   EXPECT_NE(text.find("T = Vmax / Amax"), std::string::npos);
 }
 
@@ -168,6 +169,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"[motion]\nmax_feed_mm_min = nan\n", 2, 1, "motion.max_feed_mm_min"},
         BadCase{"[motion]\nmax_jerk_mm_s3 = -1\n", 2, 1, "motion.max_jerk_mm_s3"},
         BadCase{"[motion]\nmax_override_pct = 50\n", 2, 1, "motion.max_override_pct"},
+        BadCase{"[motion]\nbound_resultant_accel = 1\n", 2, 1, "motion.bound_resultant_accel"},
         BadCase{"[axes.x]\nmin_mm = 10\nmax_mm = 10\n", 3, 1, "axes.x.min_mm"},
         BadCase{"[axes.y]\nmin_mm = 250\n", 2, 1, "axes.y.min_mm"},
         BadCase{"[axes.z]\nstart_mm = 150\n", 2, 1, "axes.z.start_mm"},
