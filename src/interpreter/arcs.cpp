@@ -56,8 +56,8 @@ ArcCheck centre_from_radius(Vec2 s, Vec2 e, double r, bool ccw, double tolerance
 }
 
 ArcCheck check_centre(Vec2 s, Vec2 e, Vec2& c, double abs_tol_mm, double rel_tol) {
-  const double r0 = std::hypot(s.a - c.a, s.b - c.b);
-  const double r1 = std::hypot(e.a - c.a, e.b - c.b);
+  const double r0 = std::sqrt((s.a - c.a) * (s.a - c.a) + (s.b - c.b) * (s.b - c.b));
+  const double r1 = std::sqrt((e.a - c.a) * (e.a - c.a) + (e.b - c.b) * (e.b - c.b));
   if (r0 < kSameEps || r1 < kSameEps) return {false, "zero-radius arc: the centre is on the arc"};
   const double abs_err = std::fabs(r1 - r0);
   const double rel_err = abs_err / std::max(r0, r1);
@@ -65,7 +65,7 @@ ArcCheck check_centre(Vec2 s, Vec2 e, Vec2& c, double abs_tol_mm, double rel_tol
     return {false, "radius to the end of the arc differs from the radius to the start"};
   }
   const double dx = e.a - s.a, dy = e.b - s.b;
-  const double chord = std::hypot(dx, dy);
+  const double chord = std::sqrt(dx * dx + dy * dy);
   if (chord >= kSameEps) {
     const Vec2 m{(s.a + e.a) / 2, (s.b + e.b) / 2};
     const Vec2 n{-dy / chord, dx / chord};

@@ -83,14 +83,31 @@ Op peek_op(const std::string& t, std::size_t pos, std::size_t& len) {
     default:
       break;
   }
-  static constexpr std::pair<std::string_view, Op> kWords[] = {
-      {"mod", Op::kMod}, {"eq", Op::kEq}, {"ne", Op::kNe},   {"gt", Op::kGt}, {"ge", Op::kGe},
-      {"lt", Op::kLt},   {"le", Op::kLe}, {"and", Op::kAnd}, {"or", Op::kOr}, {"xor", Op::kXor}};
-  for (const auto& [w, op] : kWords) {
-    if (starts(t, pos, w)) {
-      len = w.size();
-      return op;
-    }
+  // Word operators, dispatched on their first letter (this runs for every operand).
+  auto word = [&](std::string_view w, Op op) {
+    if (!starts(t, pos, w)) return Op::kNone;
+    len = w.size();
+    return op;
+  };
+  switch (t[pos]) {
+    case 'm':
+      return word("mod", Op::kMod);
+    case 'e':
+      return word("eq", Op::kEq);
+    case 'n':
+      return word("ne", Op::kNe);
+    case 'g':
+      return word("gt", Op::kGt) != Op::kNone ? Op::kGt : word("ge", Op::kGe);
+    case 'l':
+      return word("lt", Op::kLt) != Op::kNone ? Op::kLt : word("le", Op::kLe);
+    case 'a':
+      return word("and", Op::kAnd);
+    case 'o':
+      return word("or", Op::kOr);
+    case 'x':
+      return word("xor", Op::kXor);
+    default:
+      break;
   }
   return Op::kNone;
 }

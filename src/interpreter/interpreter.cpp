@@ -591,18 +591,26 @@ void Interpreter::Impl::arc(const AxisVec& target, bool ccw, std::uint32_t col) 
     turns = static_cast<std::uint32_t>(p) - 1;
   }
   // Travel: the end point, plus the axis-aligned extremes of the circle that the arc passes.
-  const double sweep = arc_sweep(s, e, c, ccw, turns);
-  Vec2 lo2, hi2;
-  arc_bounds(s, e, c, sweep, lo2, hi2);
+  // When the whole circle (c ± r) lies inside the travel, the extremes need not be computed.
   AxisVec lo = target, hi = target;
   for (std::size_t a = 0; a < kMaxAxes; ++a) {
     lo[a] = std::min(pos_[a], target[a]);
     hi[a] = std::max(pos_[a], target[a]);
   }
-  lo[pa.first] = lo2.a;
-  lo[pa.second] = lo2.b;
-  hi[pa.first] = hi2.a;
-  hi[pa.second] = hi2.b;
+  const double r = std::sqrt((s.a - c.a) * (s.a - c.a) + (s.b - c.b) * (s.b - c.b));
+  const AxisConfig& fa = machine_.axes[pa.first];
+  const AxisConfig& sa = machine_.axes[pa.second];
+  const bool circle_inside =
+      c.a - r >= fa.min_mm && c.a + r <= fa.max_mm && c.b - r >= sa.min_mm && c.b + r <= sa.max_mm;
+  if (!circle_inside) {
+    const double sweep = arc_sweep(s, e, c, ccw, turns);
+    Vec2 lo2, hi2;
+    arc_bounds(s, e, c, sweep, lo2, hi2);
+    lo[pa.first] = lo2.a;
+    lo[pa.second] = lo2.b;
+    hi[pa.first] = hi2.a;
+    hi[pa.second] = hi2.b;
+  }
   check_travel(lo, hi, col);
 
   Block b = base_block(BlockKind::kArc);

@@ -13,13 +13,13 @@ double Parameters::numbered(int n) const {
 }
 
 const double* Parameters::find_named(std::string_view name) const {
-  const NamedMap& map = (!name.empty() && name[0] == '_') ? globals_ : scopes_.back().locals;
+  const NamedMap& map = (!name.empty() && name[0] == '_') ? globals_ : scopes_[depth_ - 1].locals;
   auto it = map.find(name);
   return it == map.end() ? nullptr : &it->second;
 }
 
 void Parameters::set_named(std::string_view name, double value) {
-  NamedMap& map = (!name.empty() && name[0] == '_') ? globals_ : scopes_.back().locals;
+  NamedMap& map = (!name.empty() && name[0] == '_') ? globals_ : scopes_[depth_ - 1].locals;
   auto it = map.find(name);
   if (it != map.end()) {
     it->second = value;
@@ -29,21 +29,21 @@ void Parameters::set_named(std::string_view name, double value) {
 }
 
 void Parameters::push_scope(const std::array<double, kArgCount>& args) {
-  Scope s;
+  if (depth_ == scopes_.size()) scopes_.emplace_back();
+  Scope& s = scopes_[depth_++];
+  s.locals.clear();
   for (int i = 0; i < kArgCount; ++i) {
     s.saved_args[static_cast<std::size_t>(i)] = numbered_[static_cast<std::size_t>(i + 1)];
     numbered_[static_cast<std::size_t>(i + 1)] = args[static_cast<std::size_t>(i)];
   }
-  scopes_.push_back(std::move(s));
 }
 
 void Parameters::pop_scope() {
-  if (scopes_.size() <= 1) return;
-  const Scope& s = scopes_.back();
+  if (depth_ <= 1) return;
+  const Scope& s = scopes_[--depth_];
   for (int i = 0; i < kArgCount; ++i) {
     numbered_[static_cast<std::size_t>(i + 1)] = s.saved_args[static_cast<std::size_t>(i)];
   }
-  scopes_.pop_back();
 }
 
 }  // namespace cncore::interp

@@ -52,7 +52,7 @@ class Parameters {
   // A subroutine call opens a new scope: fresh #1…#30 (the arguments) and fresh named locals.
   void push_scope(const std::array<double, kArgCount>& args);
   void pop_scope();
-  std::size_t depth() const { return scopes_.size(); }
+  std::size_t depth() const { return depth_; }
 
  private:
   struct Scope {
@@ -61,7 +61,10 @@ class Parameters {
   };
   std::vector<double> numbered_;
   NamedMap globals_;
-  std::vector<Scope> scopes_;  // scopes_[0] is the main program
+  // scopes_[0] is the main program; scopes_[depth_ - 1] the current call. Scopes above depth_
+  // are kept (cleared) for reuse, so calls in a loop do not allocate.
+  std::vector<Scope> scopes_;
+  std::size_t depth_ = 1;
   const LiveParameters* live_ = nullptr;
 };
 
