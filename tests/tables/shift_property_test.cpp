@@ -5,6 +5,7 @@
 #include <rapidcheck.h>
 #include <rapidcheck/gtest.h>
 
+#include <cctype>
 #include <string>
 
 #include "core/error.hpp"
@@ -86,6 +87,49 @@ RC_GTEST_PROP(ShiftProperty, ControlPointsAreReachedWhereTheSpecSays, ()) {
     }
     prev_t = eff[i];
     prev_x = rows[i].x;
+  }
+}
+
+}  // namespace
+}  // namespace cncore::tables::test
+
+namespace cncore::tables::test {
+namespace {
+
+// Robustness: any text made of table words (valid or not) either runs or fails with
+// InputError naming the file.
+RC_GTEST_PROP(ReaderProperty, ArbitraryTextIsAcceptedOrRejectedCleanly, ()) {
+  const std::vector<std::string> words = {
+      "L",      "X",      "Z",      "Y",        "M7",          "N5",     "SFT", "SFT=",
+      "SFT=#1", "SFT=P1", "SFT=R1", "SFT=#9",   "SFTCAN",      "Q1",     "(c)", "(",
+      ";c",     "CUBIC",  "CYCLIC", "CYCLIC 2", "REF SPINDLE", "AXES X", "%",   "\n",
+      "\n",     "\n",     "\n",     "\n",       "\n",          "-",      ".",   "E5"};
+  auto tokens = *rc::gen::container<std::vector<std::string>>(rc::gen::oneOf(
+      rc::gen::elementOf(words),
+      rc::gen::map(rc::gen::inRange(-50, 3000), [](int v) { return std::to_string(v); })));
+  std::string text = *rc::gen::arbitrary<bool>() ? "REF TIME\nAXES X Z\nL0 X0 Z0\n" : "";
+  for (const auto& tok : tokens) {
+    bool glue = !tok.empty() && (std::isdigit(static_cast<unsigned char>(tok[0])) || tok[0] == '-');
+    text += (glue ? "" : " ") + tok;
+  }
+  RunOptions o;
+  o.values.params[1] = -5;
+  o.values.macros[1] = 5;
+  o.values.signals[1] = 1;
+  MachineConfig m = test_machine();
+  try {
+    std::vector<Table> t{parse_table(text, "f.tbl")};
+    TablePlan plan = plan_tables(t, m, o);
+    RC_ASSERT(!plan.effective.empty());
+    bool short_run = plan.effective[0].back().ref < 5000;
+    RC_CLASSIFY(!plan.has_errors(), "planned");
+    if (!plan.has_errors() && short_run) {
+      std::size_t n = 0;
+      run_tables(plan, [&](const TableSample&) { ++n; });
+      RC_ASSERT(n >= 1U);
+    }
+  } catch (const InputError& e) {
+    RC_ASSERT(e.formatted().rfind("f.tbl:", 0) == 0);
   }
 }
 
