@@ -449,7 +449,7 @@ void Interpreter::Impl::execute_words() {
       if (arc_mode) {
         arc(target, modal_.motion == Motion::kArcCcw, col);
       } else {
-        motion(target, have_axes, machine_coords, col);
+        line_motion(target, col);
       }
     }
   }
@@ -524,8 +524,8 @@ void Interpreter::Impl::emit_motion(BlockKind kind, const AxisVec& target, std::
   out_.push_back(b);
 }
 
-void Interpreter::Impl::motion(const AxisVec& target, bool /*have_axes*/, bool /*machine*/,
-                               std::uint32_t col) {
+// G0/G1 to `target` (machine coordinates).
+void Interpreter::Impl::line_motion(const AxisVec& target, std::uint32_t col) {
   const bool rapid = modal_.motion == Motion::kRapid;
   if (!rapid && !modal_.feed_set) {
     fail(col, "no feed rate: program F before the first G1/G2/G3");
@@ -713,14 +713,14 @@ void Interpreter::Impl::go_home(int code10) {
   for (std::size_t a = 0; a < kMaxAxes; ++a) any = any || words_[kAxisWords[a]].present;
   const Motion saved = modal_.motion;
   modal_.motion = Motion::kRapid;
-  if (any) motion(target_from_words(false), true, false, col);
+  if (any) line_motion(target_from_words(false), col);
   AxisVec home = pos_;
   for (std::size_t a = 0; a < kMaxAxes; ++a) {
     if (!machine_.axes[a].enabled) continue;
     if (!any || words_[kAxisWords[a]].present)
       home[a] = params_.numbered(base + static_cast<int>(a));
   }
-  motion(home, true, true, col);
+  line_motion(home, col);
   modal_.motion = saved;
 }
 

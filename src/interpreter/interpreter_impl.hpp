@@ -136,10 +136,10 @@ struct Interpreter::Impl final : LiveParameters {
   bool next(Block& out);
 
   // interpreter.cpp
-  void step();                        // read and execute one line
-  void parse_words(std::size_t pos);  // fills words_ from line_.text
-  void execute_words();               // LinuxCNC order of execution
-  void motion(const AxisVec& target, bool have_axes, bool machine_coords, std::uint32_t col);
+  void step();                                                 // read and execute one line
+  void parse_words(std::size_t pos);                           // fills words_ from line_.text
+  void execute_words();                                        // LinuxCNC order of execution
+  void line_motion(const AxisVec& target, std::uint32_t col);  // G0 / G1
   void arc(const AxisVec& target, bool ccw, std::uint32_t col);
   void emit_motion(BlockKind kind, const AxisVec& target, std::uint32_t col);
   void check_travel(const AxisVec& lo, const AxisVec& hi, std::uint32_t col) const;
