@@ -92,6 +92,24 @@ bool Interpreter::Impl::parse_oword(OWord& o) const {
   if (o.keyword == OKeyword::kNone && pos < t.size()) {
     fail(line_.col(pos), "unknown O-word keyword '" + t.substr(pos) + "'");
   }
+  // Keywords that take no value must end the line.
+  switch (o.keyword) {
+    case OKeyword::kSub:
+    case OKeyword::kElse:
+    case OKeyword::kEndIf:
+    case OKeyword::kEndWhile:
+    case OKeyword::kDo:
+    case OKeyword::kEndRepeat:
+    case OKeyword::kBreak:
+    case OKeyword::kContinue:
+      if (pos < t.size()) {
+        fail(line_.col(pos), fmt::format("unexpected '{}' after o{} {}", t.substr(pos), o.label,
+                                         keyword_text(o.keyword)));
+      }
+      break;
+    default:
+      break;
+  }
   o.args = pos;
   return true;
 }
