@@ -8,14 +8,15 @@
 // itself streams: one TableSample per cycle goes to a callback and memory does not grow with
 // the length of the run.
 //
-// Typical use (what `cncore table` does):
-//   std::vector<Table> tables{load_table(path1), load_table(path2)};
-//   TablePlan plan = plan_tables(tables, machine, options);   // throws InputError on bad input
+// Typical use (what `cncore table` does; docs/tables.md has the full example):
+//   std::vector<Table> tables{load_table(path1), load_table(path2)};   // InputError
+//   options.reference = default_reference(tables.front(), machine, rpm, master_mm_min);
+//   TablePlan plan = plan_tables(tables, machine, options);            // InputError
 //   if (print_effective) std::cout << format_effective(plan);
 //   for (const auto& d : plan.diagnostics) std::cerr << d.formatted() << '\n';
 //   if (plan.has_errors()) return 1;
-//   RunSummary s = run_tables(plan, [&](const TableSample& ts) { csv.write(to_motion_sample(ts));
-//   });
+//   auto write = [&](const TableSample& ts) { observer.on_sample(to_motion_sample(ts)); };
+//   RunSummary s = run_tables(plan, write);  // ts.ref for the `ref` column
 #pragma once
 
 #include <array>
