@@ -130,7 +130,8 @@ struct ReferenceSource {
   // Master axis moved by someone else (e.g. a part program): its position per cycle. When set,
   // it replaces start + rate·t; the rate is then only used for the limit check (0: skip it).
   // plan_tables calls it once with t = 0 (the start reference); run_tables then calls it once
-  // per cycle with increasing t from the second cycle on, so it may step a simulation.
+  // per cycle with increasing t from the second cycle on, so it may step a simulation. The plan
+  // keeps a copy of the options: capture a stateful master by reference.
   // The table follows the master forwards only: when the master goes back, the reference
   // holds at the highest value reached until the master passes it again.
   std::function<double(double t_s)> position;
