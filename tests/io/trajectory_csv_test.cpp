@@ -89,6 +89,27 @@ TEST(TrajectoryCsv, RequiredColumnsByNameOneRowPerSample) {
   EXPECT_EQ(list_dir(dir), std::vector<std::string>{"traj.csv"});
 }
 
+TEST(TrajectoryCsv, FixedDecimalsRoundToNearest) {
+  const auto dir = fresh_dir();
+  const auto path = dir / "traj.csv";
+  TrajectoryCsvWriter w(path.string(), default_machine_config(), {});
+  w.on_sample(sample(1.0000005001, 4294967295u, -0.0000006, 0.0000015, 1e13, -0.0004));
+  w.on_sample(sample(2, 1, -12.3456785, 99.9999996, -0.5e-6 + 1e-12, 12.3456));
+  w.commit();
+  const auto rows = read_csv(slurp(path), nullptr);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].at("t"), "1.000001");
+  EXPECT_EQ(rows[0].at("line"), "4294967295");
+  EXPECT_EQ(rows[0].at("x"), "-0.000001");
+  EXPECT_EQ(rows[0].at("y"), "0.000002");  // 1.5e-6 is stored a hair above: rounds up
+  EXPECT_EQ(rows[0].at("z"), "10000000000000.000000");
+  EXPECT_EQ(rows[0].at("feed"), "0.000");  // −0.0004 rounds to 0, without a minus sign
+  EXPECT_EQ(rows[1].at("x").substr(0, 9), "-12.34567");
+  EXPECT_EQ(rows[1].at("y"), "100.000000");
+  EXPECT_EQ(rows[1].at("z"), "0.000000");
+  EXPECT_EQ(rows[1].at("feed"), "12.346");
+}
+
 TEST(TrajectoryCsv, OptionalColumnsAndConfiguredAxes) {
   const auto dir = fresh_dir();
   const auto path = dir / "traj.csv";
