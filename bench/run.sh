@@ -9,10 +9,11 @@
 #   --no-gbench  skip bench_interpreter / bench_motion
 #   --accdec T   also pass `--accdec T` to `cncore run` (acc/dec type, issue 9), when supported
 # Environment: CNCORE_SHARED_DIR (default: <repo>/../shared) for the corpus; BENCH_OUT for the
-# output folder (default BUILD_DIR/bench-out). Writes BENCH_OUT/results.tsv as well as the table.
+# output folder (default BUILD_DIR/bench-out); BENCH_TIMEOUT seconds per run (default 300).
+# Writes BENCH_OUT/results.tsv as well as the table.
 set -uo pipefail
 
-usage() { sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; }
 [ $# -ge 1 ] || { usage; exit 2; }
 build=$1
 shift
@@ -44,6 +45,7 @@ done
 shared=${CNCORE_SHARED_DIR:-$repo/../shared}
 corpus=$shared/testdata/gcode
 out=${BENCH_OUT:-$build/bench-out}
+tmo=${BENCH_TIMEOUT:-300}
 mkdir -p "$out/programs" "$out/runs"
 
 # Peak RSS and wall time of a command: GNU time if present, else python3's getrusage.
@@ -51,17 +53,20 @@ measure() {  # measure LOGFILE cmd...  → prints "wall_s rss_kb", returns the c
   local log=$1
   shift
   if [ -x /usr/bin/time ]; then
-    /usr/bin/time -f '%e %M' -o "$log.time" "$@" >"$log" 2>&1
+    /usr/bin/time -f '%e %M' -o "$log.time" timeout "$tmo" "$@" >"$log" 2>&1
     local rc=$?
     tail -1 "$log.time"
     return $rc
   fi
-  python3 - "$log" "$@" <<'PY'
+  python3 - "$log" "$tmo" "$@" <<'PY'
 import resource, subprocess, sys, time
-log, cmd = sys.argv[1], sys.argv[2:]
+log, tmo, cmd = sys.argv[1], float(sys.argv[2]), sys.argv[3:]
 t0 = time.monotonic()
 with open(log, "w") as f:
-    rc = subprocess.call(cmd, stdout=f, stderr=subprocess.STDOUT)
+    try:
+        rc = subprocess.call(cmd, stdout=f, stderr=subprocess.STDOUT, timeout=tmo)
+    except subprocess.TimeoutExpired:
+        rc = 124
 wall = time.monotonic() - t0
 rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
 print(f"{wall:.2f} {rss}")
@@ -145,8 +150,9 @@ for p in "${programs[@]}"; do
   [ $rc_l -eq 0 ] && look_s=$(json_get "$out/runs/$tag.look.json" cycle_time_s) &&
     cycles=$(json_get "$out/runs/$tag.look.json" cycles)
   [ $rc_s -eq 0 ] && stop_s=$(json_get "$out/runs/$tag.stop.json" cycle_time_s)
-  [ $rc_l -ne 0 ] && echo "  $name: lookahead run failed (exit $rc_l): $(grep -m1 error "$out/runs/$tag.look.log")"
-  [ $rc_s -ne 0 ] && echo "  $name: stop run failed (exit $rc_s): $(grep -m1 error "$out/runs/$tag.stop.log")"
+  why() { [ "$1" -eq 124 ] && echo "timed out after ${tmo} s" || echo "exit $1: $(grep -m1 error "$2")"; }
+  [ $rc_l -ne 0 ] && echo "  $name: lookahead run failed ($(why $rc_l "$out/runs/$tag.look.log"))"
+  [ $rc_s -ne 0 ] && echo "  $name: stop run failed ($(why $rc_s "$out/runs/$tag.stop.log"))"
   read -r wall rss <<<"$tm_l"
   row=$(python3 - "$name" "$blocks" "$look_s" "$stop_s" "$bound_s" "$wall" "$cycles" "$rss" <<'PY'
 import sys
