@@ -1,0 +1,100 @@
+// The per-cycle driver: kernel samples in, override out; no heap allocation per cycle.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "core/error.hpp"
+#include "feedcontrol/adaptive_loop.hpp"
+
+using namespace cncore::feed;
+
+// Counts every heap allocation in this test program.
+namespace {
+std::atomic<long> g_allocations{0};
+}
+void* operator new(std::size_t n) {
+  ++g_allocations;
+  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+
+namespace {
+
+AdaptiveSettings settings() {
+  AdaptiveSettings s;
+  s.enabled = true;
+  s.control_cycles = 4;
+  return s;
+}
+
+}  // namespace
+
+TEST(Loop, OnSampleMeasuresAlongThePathAndFillsTheLoadColumns) {
+  // Load 0 % at 0 mm rising to 100 % at 100 mm.
+  auto rec = RecordedLoad::parse("s_mm,load_pct\n0,0\n100,100\n", "load.csv");
+  AdaptiveFeedLoop loop(settings(), 0.001, 200, rec);
+  cncore::motion::Sample s;
+  for (int n = 0; n <= 30; ++n) {
+    s.t_s = n * 0.001;
+    s.path_position[0] = 3.0 * n;  // 3 mm per cycle along X, then 4 mm along Y: 5 mm
+    s.path_position[1] = 4.0 * n;
+    loop.on_sample(s, 100);
+  }
+  EXPECT_NEAR(loop.path_s_mm(), 150, 1e-9);
+  EXPECT_DOUBLE_EQ(s.load_pct, 100);  // held after the last row
+  EXPECT_DOUBLE_EQ(s.load_target_pct, settings().target_load_pct);
+}
+
+TEST(Loop, DisabledPassesTheOperatorOverride) {
+  auto rec = RecordedLoad::parse("t_s,load_pct\n0,90\n", "load.csv");
+  AdaptiveSettings s = settings();
+  s.enabled = false;
+  AdaptiveFeedLoop loop(s, 0.001, 200, rec);
+  EXPECT_DOUBLE_EQ(loop.cycle(0, 0, 100, 70), 70);
+  EXPECT_DOUBLE_EQ(loop.last_load_pct(), 90);  // still measured for the trajectory
+  loop.set_enabled(true);
+  // Load 90 > target 60: the controller lowers the feed.
+  EXPECT_LT(loop.cycle(0.001, 0, 100, 70), 70);
+  loop.set_enabled(false);
+  EXPECT_DOUBLE_EQ(loop.cycle(0.002, 0, 100, 70), 70);
+}
+
+TEST(Loop, InvalidSettingsAreRejectedAtConstruction) {
+  auto rec = RecordedLoad::parse("t_s,load_pct\n0,90\n", "load.csv");
+  AdaptiveSettings s = settings();
+  s.upper_pct = 300;  // above the machine's 200 %
+  EXPECT_THROW(AdaptiveFeedLoop(s, 0.001, 200, rec), cncore::InputError);
+}
+
+TEST(Loop, NoHeapAllocationPerCycle) {
+  auto rec = RecordedLoad::parse("t_s,load_pct\n0,5\n1,80\n2,20\n3,90\n", "load.csv");
+  PlantSettings ps;
+  ps.depth.s_mm = {0, 50, 50, 100};
+  ps.depth.depth_mm = {0.5, 0.5, 2, 2};
+  PlantLoad plant(ps);
+  for (AntiWindup p : {AntiWindup::kNone, AntiWindup::kClamp, AntiWindup::kBackCalculation}) {
+    AdaptiveSettings s = settings();
+    s.antiwindup = p;
+    AdaptiveFeedLoop from_file(s, 0.001, 200, rec);
+    AdaptiveFeedLoop from_plant(s, 0.001, 200, plant);
+    cncore::motion::Sample sample;
+    const long before = g_allocations.load();
+    double ovr = 100;
+    for (int n = 0; n < 4000; ++n) {
+      sample.t_s = n * 0.001;
+      sample.path_position[0] = n * 0.025;
+      sample.feed_mm_min = 15 * ovr;
+      ovr = from_file.on_sample(sample, 100);
+      ovr = from_plant.cycle(sample.t_s, n * 0.025, 15 * ovr, 100);
+    }
+    EXPECT_EQ(g_allocations.load() - before, 0);
+  }
+}
