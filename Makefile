@@ -9,7 +9,7 @@ DEB_PACKAGES := cmake ninja-build g++ make pkg-config \
   libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev libfast-float-dev \
   libmuparser-dev libgtest-dev libgmock-dev libbenchmark-dev librapidcheck-dev time
 
-.PHONY: all deps configure build test demo bench format clean
+.PHONY: all deps configure build test demo bench format clean fuzz test-sanitize
 
 all: build
 
@@ -41,6 +41,21 @@ demo: build
 
 bench: build
 	@bash bench/run.sh $(BUILD)
+
+# libFuzzer targets (clang), each run for FUZZ_SECONDS; prints executions and findings.
+FUZZ_SECONDS ?= 60
+fuzz: deps
+	@command -v clang++ >/dev/null || { SUDO=""; [ "$$(id -u)" -eq 0 ] || SUDO=sudo; \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq clang; }
+	@bash fuzz/run.sh $(FUZZ_SECONDS)
+
+# The whole test suite under AddressSanitizer + UndefinedBehaviorSanitizer (gcc); any finding
+# fails its test (halt_on_error). Ends with "N passed, N failed" like `make test`.
+test-sanitize: deps
+	@cmake --preset asan >/dev/null
+	@cmake --build --preset asan -j2
+	@ASAN_OPTIONS=halt_on_error=1:abort_on_error=1:detect_leaks=1:print_stacktrace=1 \
+	  UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 bash tools/run-tests.sh build/asan
 
 format:
 	@git ls-files '*.cpp' '*.hpp' | xargs clang-format -i
