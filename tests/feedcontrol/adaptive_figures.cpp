@@ -1,6 +1,7 @@
 // Writes the closed-loop traces of the three anti-wind-up policies as CSV (one file per policy,
 // every 10th cycle) and prints the figures quoted in docs/adaptive-feed.md.
 //   cncore_adaptive_figures OUT_DIR
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -50,11 +51,15 @@ int main(int argc, char** argv) {
         [](const TraceRow& r) { return r.integral_term_pct; },
         [](const TraceRow& r) { return r.limited; });
     if (p == AntiWindup::kClamp) above_clamp = above;
-    std::printf(
-        "%-17s run %.3f s | light cut: override max %.1f %% | Ki*I while limited %.1f..%.1f %% | "
-        "after jump: load peak %.1f %%, above target+5 %.3f s, back within %.3f s",
-        name.c_str(), trace.back().t_s, ovr.max, iterm_limited.min, iterm_limited.max,
-        load_peak.max, above, recover);
+    std::printf("%-17s run %.3f s | light cut: override max %.1f %% | ", name.c_str(),
+                trace.back().t_s, ovr.max);
+    if (std::isfinite(iterm_limited.span())) {
+      std::printf("Ki*I while limited %.1f..%.1f %% | ", iterm_limited.min, iterm_limited.max);
+    } else {
+      std::printf("never limited | ");
+    }
+    std::printf("after jump: load peak %.1f %%, above target+5 %.3f s, back within %.3f s",
+                load_peak.max, above, recover);
     if (p == AntiWindup::kBackCalculation && above_clamp > 0) {
       std::printf(" | ratio to clamp %.3f", above / above_clamp);
     }
