@@ -278,6 +278,23 @@ TEST_F(Cli, RunWritesTrajectoryFromStartToProgrammedEnd) {
   EXPECT_TRUE(j.at("max_axis_accel_mm_s2").contains("x"));
 }
 
+TEST_F(Cli, VariablesParametersAndInchesReachTheTrajectory) {
+  // X from a named parameter, Y from a numbered one, Z in inches: ends at 12, 7, −25.4·0.5.
+  write(dir_ / "p.ngc", "G21 G90\nG1 X#<dist> Y#1 F3000\nG20\nG1 Z-0.5 F20\nM30\n");
+  const Result r = run("run p.ngc --var dist=12 --param 1=7 --trajectory t.csv");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = read_csv(dir_ / "t.csv");
+  ASSERT_FALSE(rows.empty());
+  EXPECT_NEAR(rows.back().at("x"), 12.0, 1e-6);
+  EXPECT_NEAR(rows.back().at("y"), 7.0, 1e-6);
+  EXPECT_NEAR(rows.back().at("z"), -12.7, 1e-6);
+  // Without the variable the program is wrong (undefined parameter) at line 2.
+  const Result bad = run("run p.ngc --param 1=7 --trajectory t2.csv");
+  EXPECT_EQ(bad.code, 1) << bad.err;
+  EXPECT_EQ(bad.err.rfind("p.ngc:2:", 0), 0u) << bad.err;
+  EXPECT_FALSE(fs::exists(dir_ / "t2.csv"));
+}
+
 TEST_F(Cli, StopModeIsSlowerThanLookahead) {
   const Result a = run("run " + example("seed-line-arc-line.ngc") + " --summary a.json");
   const Result b =
