@@ -22,7 +22,7 @@ struct Kernel::Impl {
         options(o),
         lim(planner::make_limits(m, o.bound_resultant_accel)),
         // Two items per block at most (an exact-stop block adds its stop event).
-        buf(std::max<std::size_t>(4, static_cast<std::size_t>(m.lookahead_blocks) + 1)),
+        buf(std::max<std::size_t>(4, static_cast<std::size_t>(m.lookahead_blocks) + 2)),
         acc(buf, lim, o.mode, m.max_override_pct / 100.0, o.check_reference_walk),
         barriers(buf.capacity()),
         post_ring(lim.post_filter() ? lim.post_cycles : 1) {
@@ -38,7 +38,8 @@ struct Kernel::Impl {
     override_pct = std::clamp(std::isfinite(pct) ? pct : 0.0, 0.0, machine.max_override_pct);
   }
 
-  bool wants_block() const { return buf.size() + 2 <= buf.capacity(); }
+  // A block takes up to three items: a stop before it, itself, an exact stop after it.
+  bool wants_block() const { return buf.size() + 3 <= buf.capacity(); }
 
   void push_event(const Segment& ev) {
     const std::uint64_t idx = buf.push(ev);
@@ -76,6 +77,12 @@ struct Kernel::Impl {
     Segment seg = planner::make_motion_segment(b, lim);
     if (seg.length_mm > 0) {
       seg.s0_mm = total_mm;
+      const bool joint = have_motion && !barrier_since_motion && last_motion >= buf.begin_index();
+      if (joint && planner::joint_speed_pc(buf[last_motion], seg, lim) <= 0) {
+        // A joint that must be passed at speed 0 (exact path through the post filter): a stop
+        // that also waits for the post filter to settle, so the corner is not rounded.
+        push_event(stop_event(b.line));
+      }
       const std::uint64_t idx = buf.push(seg);
       if (have_motion && !barrier_since_motion && last_motion >= buf.begin_index()) {
         acc.on_joint(last_motion, buf[last_motion], buf[idx]);
@@ -89,15 +96,19 @@ struct Kernel::Impl {
     }
     if (b.path_mode == PathMode::kExactStop) {
       // Exact stop: speed 0 and settled at the end of the block (an event with no action).
-      Segment stop;
-      stop.kind = ItemKind::kDwell;
-      stop.barrier = true;
-      stop.start = last_end;
-      stop.end = last_end;
-      stop.s0_mm = total_mm;
-      stop.line = b.line;
-      push_event(stop);
+      push_event(stop_event(b.line));
     }
+  }
+
+  Segment stop_event(std::uint32_t line) const {
+    Segment stop;
+    stop.kind = ItemKind::kDwell;
+    stop.barrier = true;
+    stop.start = last_end;
+    stop.end = last_end;
+    stop.s0_mm = total_mm;
+    stop.line = line;
+    return stop;
   }
 
   double stop_mm() const {

@@ -19,7 +19,8 @@ MovingAverageAccDec::MovingAverageAccDec(const planner::SegmentBuffer& buffer,
       check_(check_reference_walk),
       la_(2 * buffer.capacity(), or_max),
       stage1_(limits.t_cycles),
-      stage2_(limits.t2_cycles) {}
+      stage2_(limits.t2_cycles),
+      last_step_(0.25 * limits.amax_pc2 * limits.t_cycles) {}
 
 void MovingAverageAccDec::on_joint(std::uint64_t index_a, const Segment& a, const Segment& b) {
   if (mode_ != Mode::kLookahead) return;
@@ -60,6 +61,15 @@ const Segment* MovingAverageAccDec::advance_commanded() {
   return s.kind == ItemKind::kMotion ? &s : nullptr;
 }
 
+// See last_step_: the step that reaches a stop `left` ahead is between last_step_ and
+// 2·last_step_ (unless the whole way is shorter), and no step leaves less than last_step_.
+double MovingAverageAccDec::shape_last_step(double u, double left) const {
+  if (u <= 0) return 0;
+  if (left <= 2 * last_step_) return std::min(u, left);
+  if (u >= left || left - u < last_step_) return left - last_step_;
+  return u;
+}
+
 void MovingAverageAccDec::step(const CycleInput& in) {
   const Segment* seg = advance_commanded();
   const double uc = (in.hold || seg == nullptr) ? 0.0 : seg->feed_pc * in.or_ratio;  // Uc = F·OR
@@ -72,9 +82,8 @@ void MovingAverageAccDec::step(const CycleInput& in) {
     last_ul_ = ul;
     const double to_stop = std::max(0.0, in.stop_mm - cmd_mm_);
     u = std::max(0.0, std::min({uc, vb, ul, to_stop}));  // the limiter: U = min(Uc, Ul, Vb)
-    next = cmd_mm_ + u;
-    // Land exactly on the stop or range start that bound the step (no rounding short of it).
-    if (u > 0 && u >= to_stop) next = in.stop_mm;
+    u = shape_last_step(u, to_stop);
+    next = u >= to_stop ? in.stop_mm : cmd_mm_ + u;  // land exactly on a stop
   } else {
     // Conventional method: every block starts with `wait` cycles of blocked input, and the
     // commanded position stops at the block end, so the tool stops there.
@@ -87,7 +96,7 @@ void MovingAverageAccDec::step(const CycleInput& in) {
     } else if (seg != nullptr) {
       const double target = std::min(seg->end_mm(), in.stop_mm);
       const double left = std::max(0.0, target - cmd_mm_);
-      u = std::max(0.0, std::min({uc, vb, left}));
+      u = shape_last_step(std::max(0.0, std::min({uc, vb, left})), left);
       next = u > 0 && u >= left ? target : cmd_mm_ + u;
     }
     last_ul_ = u;

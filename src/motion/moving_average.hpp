@@ -59,6 +59,7 @@ class MovingAverageAccDec final : public AccDec {
 
  private:
   const planner::Segment* advance_commanded();
+  double shape_last_step(double u, double left) const;
 
   const planner::SegmentBuffer& buf_;
   planner::Limits lim_;
@@ -72,6 +73,11 @@ class MovingAverageAccDec final : public AccDec {
   std::uint32_t wait_ = 0;              // stop mode: cycles the input is still blocked
   double cmd_mm_ = 0, tool_mm_ = 0, tool_step_ = 0;
   double last_ul_ = 0;
+  // A stop is approached with a last commanded step between last_step_ and 2·last_step_ =
+  // Amax·τ²·T/2, so the tool's last step before it stands still is ≤ Amax·τ²/2: it arrives at
+  // ≤ Amax·τ/2, at most the passing speed Amax·τ/(2 sin θ/2) of any corner (stop mode stops at
+  // joints that are corners), and its second-to-last sample is visibly short of the stop.
+  double last_step_ = 0;
   std::uint64_t mismatches_ = 0;
 };
 

@@ -152,9 +152,11 @@ Segment make_motion_segment(const Block& b, const Limits& lim) {
   const double t = lim.t_cycles;
   if (s.arc) {
     const double a = lim.amax_pc2;
-    const double rho = s.rho_mm;
+    // Spec 01: Vb = √(R·Amax) with the arc's radius R (for a helix R < ρ, the radius of
+    // curvature, so the normal acceleration v²/ρ stays below Amax with room).
+    const double rho = 0.5 * (s.r0 + s.r1);
     if (!lim.bound_resultant) {
-      vb = std::min(vb, std::sqrt(rho * a));  // v²/ρ ≤ Amax
+      vb = std::min(vb, std::sqrt(rho * a));  // v²/R ≤ Amax
     } else {
       // (v²/ρ)² + (v/T)² ≤ Amax²: normal plus the filter's tangential ramp (≤ Vb/T per cycle).
       const double it2 = 1 / (t * t);

@@ -92,9 +92,19 @@ struct Prog {
   }
 };
 
-// The seed's example (FIG. 3): a line, an arc and a line, with a 45° corner at both joints
-// (end points G[1] and G[2]); feed at the machine's maximum so every limit matters.
+// The seed's example (FIG. 3): a line ending at G[1], an arc ending at G[2] and a line ending
+// at G[3]. As in the seed's FIG. 4 the joints are passed without stopping, at the passing speed
+// of the arc (R 5 mm: √(R·Amax) = 100 mm/s below the feed 10 000 mm/min = 166.7 mm/s).
 inline Prog seed_example(double feed = 10000) {
+  Prog p;
+  p.line_to(Vec3{50, 0, 0}, feed);
+  p.arc_to(Vec3{55, 5, 0}, Vec3{50, 5, 0}, feed);  // quarter turn, tangent at both ends
+  p.line_to(Vec3{55, 50, 0}, feed);
+  return p;
+}
+
+// Line, arc, line with real corners: 45° at both joints (Vg = Amax·τ/(2 sin 22.5°) = 2.6 mm/s).
+inline Prog corner_example(double feed = 10000) {
   Prog p;
   p.line_to(Vec3{50, 0, 0}, feed);
   p.arc_to(Vec3{50, 20, 0}, Vec3{40, 10, 0}, feed);  // R = 14.14, enters at 45°, leaves at 135°
