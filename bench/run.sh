@@ -3,11 +3,12 @@
 # look-ahead and stop modes against the time-optimal lower bound, with wall time, cycles per second
 # and peak memory; then the Google Benchmark executables if they are built.
 #
-#   bash bench/run.sh BUILD_DIR [--quick] [--no-gbench] [--accdec TYPE]
+#   bash bench/run.sh BUILD_DIR [--quick] [--no-gbench] [--accdec TYPE] [--only REGEX]
 #
 #   --quick      skip the 1 000 000-line CAM program and the 100x refined stress test
 #   --no-gbench  skip bench_interpreter / bench_motion
 #   --accdec T   also pass `--accdec T` to `cncore run` (acc/dec type, issue 9), when supported
+#   --only RE    run only the programs whose path matches the extended regex RE
 # Environment: CNCORE_SHARED_DIR (default: <repo>/../shared) for the corpus; BENCH_OUT for the
 # output folder (default BUILD_DIR/bench-out); BENCH_TIMEOUT seconds per run (default 300).
 # Writes BENCH_OUT/results.tsv as well as the table.
@@ -15,16 +16,19 @@ set -uo pipefail
 
 usage() { sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; }
 [ $# -ge 1 ] || { usage; exit 2; }
+case $1 in -h|--help) usage; exit 0 ;; esac
 build=$1
 shift
 quick=0
 gbench=1
 accdec=""
+only=""
 while [ $# -gt 0 ]; do
   case $1 in
     --quick) quick=1 ;;
     --no-gbench) gbench=0 ;;
     --accdec) accdec=${2:-}; shift ;;
+    --only) only=${2:-}; shift ;;
     -h|--help) usage; exit 0 ;;
     *) echo "run.sh: unknown option $1" >&2; usage >&2; exit 2 ;;
   esac
@@ -32,7 +36,8 @@ while [ $# -gt 0 ]; do
 done
 
 repo=$(cd "$(dirname "$0")/.." && pwd)
-build=$(cd "$build" 2>/dev/null && pwd) || { echo "run.sh: no build directory $1" >&2; exit 2; }
+build_arg=$build
+build=$(cd "$build" 2>/dev/null && pwd) || { echo "run.sh: no build directory $build_arg" >&2; exit 2; }
 cncore=$build/src/app/cncore
 bound=$build/bench/bound/cncore-bound
 gen=$build/bench/gen/cncore-gen
@@ -129,6 +134,7 @@ printf 'program\tblocks\tlookahead_s\tstop_s\tbound_s\tlook/bound\tstop/bound\tw
 printf '%-44s %8s %10s %10s %10s %7s %7s %8s %8s %7s\n' program blocks look_s stop_s bound_s \
   look/b stop/b wall_s Mcyc/s RSS_MB
 for p in "${programs[@]}"; do
+  if [ -n "$only" ] && ! [[ $p =~ $only ]]; then continue; fi
   name=${p#"$corpus"/}
   name=${name#"$out"/programs/}
   name=${name#"$repo"/}
