@@ -30,7 +30,7 @@ const cncore::MachineConfig& machine() {
 }
 
 bool finite(const cncore::AxisVec& v) {
-  for (double x : v) {
+  for (double x : v.v) {
     if (!std::isfinite(x)) return false;
   }
   return true;
