@@ -8,6 +8,7 @@
 #include <charconv>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <optional>
@@ -129,6 +130,10 @@ MachineConfig machine_from(const std::string& path) {
 }
 
 void require_readable(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw InputError(path, 0, 0, "cannot open: it is a directory");
+  }
   std::ifstream in(path);
   if (!in) throw InputError(path, 0, 0, "cannot open");
 }

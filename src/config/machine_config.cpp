@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <optional>
@@ -319,6 +320,10 @@ MachineConfig parse_machine_config(std::string_view toml_text, const std::string
 }
 
 MachineConfig load_machine_config(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw InputError(path, 0, 0, "cannot open machine configuration: it is a directory");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, 0, 0, "cannot open machine configuration");
   std::ostringstream text;

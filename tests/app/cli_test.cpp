@@ -175,6 +175,16 @@ TEST_F(Cli, MissingProgramIsExitOneCannotOpen) {
   const Result r = run("run nofile.ngc --trajectory t.csv --summary s.json");
   EXPECT_EQ(r.code, 1) << r.err;
   EXPECT_EQ(r.err, "nofile.ngc:0:0: error: cannot open\n");
+  fs::create_directory(dir_ / "adir");
+  const Result d = run("run adir");
+  EXPECT_EQ(d.code, 1);
+  EXPECT_EQ(d.err.rfind("adir:0:0: error: cannot open", 0), 0u) << d.err;
+  write(dir_ / "p.ngc", "G1 X1 F100\n");
+  const Result m = run("run p.ngc --machine adir");
+  EXPECT_EQ(m.code, 1);
+  EXPECT_EQ(m.err.rfind("adir:0:0: error: cannot open", 0), 0u) << m.err;
+  fs::remove(dir_ / "adir");
+  fs::remove(dir_ / "p.ngc");
   const Result c = run("check nofile.ngc");
   EXPECT_EQ(c.code, 1);
   EXPECT_EQ(c.err, "nofile.ngc:0:0: error: cannot open\n");
