@@ -77,8 +77,11 @@ void MovingAverageAccDec::step(const CycleInput& in) {
   double u = 0;
   double next = cmd_mm_;
   if (mode_ == Mode::kLookahead) {
-    const double ul = la_.limit(cmd_mm_, tool_mm_, in.or_ratio);
-    if (check_ && la_.reference_limit(cmd_mm_, tool_mm_, in.or_ratio) != ul) ++mismatches_;
+    // Caps are released one cycle after the tool passed their point (prev_tool_mm_): the cycle
+    // that turns the corner and the first cycle of acceleration after it then fall in different
+    // second differences, so a per-axis corner limit and the axis's ramp limit do not add up.
+    const double ul = la_.limit(cmd_mm_, prev_tool_mm_, in.or_ratio);
+    if (check_ && la_.reference_limit(cmd_mm_, prev_tool_mm_, in.or_ratio) != ul) ++mismatches_;
     last_ul_ = ul;
     const double to_stop = std::max(0.0, in.stop_mm - cmd_mm_);
     u = std::max(0.0, std::min({uc, vb, ul, to_stop}));  // the limiter: U = min(Uc, Ul, Vb)
@@ -105,6 +108,7 @@ void MovingAverageAccDec::step(const CycleInput& in) {
   const double u1 = stage1_.push(u);
   const double u2 = stage2_.push(u1);
   tool_step_ = u2;
+  prev_tool_mm_ = tool_mm_;
   tool_mm_ += u2;
   if (at_rest()) tool_mm_ = cmd_mm_;  // at rest the tool is exactly at the commanded position
 }

@@ -71,7 +71,7 @@ class MovingAverageAccDec final : public AccDec {
   std::uint64_t cmd_idx_ = 0;           // buffer item under the commanded position
   std::uint64_t entered_ = UINT64_MAX;  // stop mode: the block whose start wait was done
   std::uint32_t wait_ = 0;              // stop mode: cycles the input is still blocked
-  double cmd_mm_ = 0, tool_mm_ = 0, tool_step_ = 0;
+  double cmd_mm_ = 0, tool_mm_ = 0, prev_tool_mm_ = 0, tool_step_ = 0;
   double last_ul_ = 0;
   // A stop is approached with a last commanded step between last_step_ and 2·last_step_ =
   // Amax·τ²·T/2, so the tool's last step before it stands still is ≤ Amax·τ²/2: it arrives at

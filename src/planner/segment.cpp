@@ -40,9 +40,12 @@ Limits make_limits(const MachineConfig& m, bool bound_resultant) {
   const double vmax_mm_s = m.max_feed_mm_min / 60.0;
   // T = ceil(Vmax / (Amax·τ)): a step 0 → Vmax through the moving average ramps at ≤ Amax.
   l.t_cycles = ceil_cycles(vmax_mm_s / (m.max_accel_mm_s2 * tau));
-  // T2 = ceil(Amax / (Jmax·τ)): the second stage ramps the acceleration, jerk ≤ Jmax.
+  // Second stage: its output's jerk is (a1[t] − a1[t−T2])/T2 with the first stage's
+  // acceleration a1 ∈ [−Amax, Amax]; a short move flips a1 from +Amax to −Amax, so the jerk
+  // can reach 2·Amax/T2 and T2 = ceil(2·Amax / (Jmax·τ)) keeps it ≤ Jmax (spec 01 writes
+  // Amax/T2, which holds only while the acceleration does not change sign within T2).
   l.t2_cycles =
-      m.max_jerk_mm_s3 > 0 ? ceil_cycles(m.max_accel_mm_s2 / (m.max_jerk_mm_s3 * tau)) : 1;
+      m.max_jerk_mm_s3 > 0 ? ceil_cycles(2 * m.max_accel_mm_s2 / (m.max_jerk_mm_s3 * tau)) : 1;
   l.post_cycles =
       m.post_filter_s > 0 ? static_cast<std::uint32_t>(std::lround(m.post_filter_s / tau)) : 0;
   l.vmax_pc = vmax_mm_s * tau;

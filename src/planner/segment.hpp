@@ -21,7 +21,7 @@ namespace cncore::planner {
 struct Limits {
   double period_s = 0.001;
   std::uint32_t t_cycles = 1;     // T: first moving average, ceil(Vmax / (Amax·τ))
-  std::uint32_t t2_cycles = 1;    // T2: second stage, ceil(Amax / (Jmax·τ)); 1 = no second stage
+  std::uint32_t t2_cycles = 1;    // T2: second stage, ceil(2·Amax / (Jmax·τ)); 1 = none
   std::uint32_t post_cycles = 0;  // Tp: post-interpolation moving average; 0 or 1 = off
   double vmax_pc = 0;             // max feed
   double rapid_pc = 0;            // rapid rate, at most amax·T (the filter's ramp bound)

@@ -30,7 +30,9 @@ RunOpts opts(Mode mode) {
   return o;
 }
 
-std::string mode_name(Mode m) { return m == Mode::kLookahead ? "Lookahead" : "Stop"; }
+std::string mode_name(Mode m) {
+  return m == Mode::kLookahead ? "Lookahead" : "Stop";
+}
 
 // The last sample is the programmed end, at rest; the first is the start at t = 0.
 void expect_ends(const RunResult& r, const AxisVec& start, const AxisVec& end) {
@@ -187,9 +189,9 @@ TEST_P(BothModes, HelicesAndTurns) {
   const MachineConfig m = test_machine();
   Prog p;
   p.line_to(Vec3{5, 0, 0}, 8000);
-  p.arc_to(Vec3{-5, 0, -3}, Vec3{0, 0, 0}, 8000);                // half-turn helix, rises −3
+  p.arc_to(Vec3{-5, 0, -3}, Vec3{0, 0, 0}, 8000);                  // half-turn helix, rises −3
   p.arc_to(Vec3{-5, 0, -13}, Vec3{0, 0, -3}, 8000, {0, 0, 1}, 2);  // two extra full turns
-  p.arc_to(Vec3{-5, 5, -18}, Vec3{-5, 0, -18}, 6000, {0, 0, -1});   // G2-like, 3/4 turn... (cw)
+  p.arc_to(Vec3{-5, 5, -18}, Vec3{-5, 0, -18}, 6000, {0, 0, -1});  // G2-like, 3/4 turn... (cw)
   p.line_to(Vec3{0, 0, 0}, 10000);
   const RunResult r = run(m, p.blocks, opts(GetParam()));
   const auto rep = check(m, p.blocks, r);
@@ -245,8 +247,8 @@ TEST_P(BothModes, OverrideStepsKeepTheLimits) {
   const MachineConfig m = test_machine();
   const Prog p = corner_example(6000);
   RunOpts o = opts(GetParam());
-  o.override_steps = {{0.05, 200}, {0.31, 37}, {0.313, 150}, {0.5, 0}, {0.7, 120},
-                      {0.9, 10},   {0.95, 200}, {1.2, 75},   {1.4, 200}};
+  o.override_steps = {{0.05, 200}, {0.31, 37},  {0.313, 150}, {0.5, 0},  {0.7, 120},
+                      {0.9, 10},   {0.95, 200}, {1.2, 75},    {1.4, 200}};
   const RunResult r = run(m, p.blocks, o);
   const auto rep = check(m, p.blocks, r);
   EXPECT_TRUE(rep.ok()) << rep.summary();
@@ -263,8 +265,8 @@ TEST(Kernel, FeedHoldStopsOnThePathAndResumes) {
   EXPECT_TRUE(rep.ok()) << rep.summary();
   expect_ends(r, AxisVec{}, p.pos);
   // Stopped within the filter time T·τ (+1 cycle) after the hold, and stays until resume.
-  const double t_filter = std::ceil(m.max_feed_mm_min / 60 / (m.max_accel_mm_s2 * m.period_s)) *
-                          m.period_s;
+  const double t_filter =
+      std::ceil(m.max_feed_mm_min / 60 / (m.max_accel_mm_s2 * m.period_s)) * m.period_s;
   for (const auto& s : r.samples) {
     if (s.t_s >= 0.2 + t_filter + 2 * m.period_s && s.t_s < 0.6) {
       ASSERT_EQ(s.feed_mm_min, 0.0) << "t " << s.t_s;
