@@ -132,7 +132,9 @@ CheckReport check_trajectory(const Trajectory& tr, const Path& path, const Limit
   };
 
   // ---- Projection of every sample onto the path, walking forward only. ----
-  const double snap = std::max(1e-7, 100 * q);
+  // First segment within `snap` wins (the data is on the path up to its rounding); kept tight so
+  // that a nearby leg of a hairpin is not taken for the segment the tool is on.
+  const double snap = 1e-7 + 4 * q;
   const double on_path = std::max(1e-6, 10 * q);
   const double vcap_mm_s = std::max(lim.max_feed_mm_min, lim.rapid_mm_min) / 60.0 *
                            std::max(1.0, lim.max_override_pct / 100.0);
