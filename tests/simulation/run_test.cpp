@@ -4,12 +4,17 @@
 #include "simulation/run.hpp"
 
 #include <gtest/gtest.h>
+#include <malloc.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
 #include "core/error.hpp"
+#include "io/summary.hpp"
+#include "io/trajectory_csv.hpp"
 
 namespace cncore::sim {
 namespace {
@@ -95,6 +100,48 @@ TEST(RunProgram, AnErrorStopsAtTheEndOfTheLastGoodBlockThenThrows) {
                          last.position[kY] - before.position[kY]),
               0.002 + 1e-9);
   }
+}
+
+// Streaming: with the trajectory and summary observers attached, the heap in use stops growing
+// once the execution-data buffer is full. 60 000 chords of 0.5 mm on a circle (about 300 000
+// cycles): the heap late in the run is the heap after 10 000 cycles (glibc mallinfo2), within
+// 64 KiB.
+struct HeapProbe : SampleObserver {
+  std::uint64_t cycles = 0;
+  std::size_t early = 0, late_max = 0;
+  void on_sample(const motion::Sample&) override {
+    if (++cycles % 1000 != 0) return;
+    const std::size_t in_use = mallinfo2().uordblks;
+    if (cycles == 10000) early = in_use;
+    if (cycles > 10000) late_max = std::max(late_max, in_use);
+  }
+};
+
+TEST(RunProgram, HeapDoesNotGrowWithProgramLength) {
+  std::string text = "G21 G90 G17 F6000\nG1 X100 Y0\n";
+  constexpr int kChords = 60000;
+  const double r = 100, step = 0.5 / r;  // chord angle for 0.5 mm
+  char line[96];
+  for (int k = 1; k <= kChords; ++k) {
+    std::snprintf(line, sizeof line, "G1 X%.5f Y%.5f\n", r * std::cos(k * step),
+                  r * std::sin(k * step));
+    text += line;
+  }
+  text += "M30\n";
+  const std::string p = program_file("heap.ngc", text);
+  text = std::string();
+  text.shrink_to_fit();
+  const MachineConfig m = default_machine_config();
+  const std::string csv = (std::filesystem::path(CNCORE_TEST_TMP_DIR) / "heap.csv").string();
+  io::TrajectoryCsvWriter writer(csv, m, {});
+  io::SummaryObserver summary(m, "lookahead");
+  HeapProbe probe;
+  const RunCounts n = run_program(p, m, {}, {&writer, &summary, &probe});
+  ASSERT_EQ(n.blocks, static_cast<std::uint64_t>(kChords + 1));
+  ASSERT_GT(probe.cycles, 100000u);
+  ASSERT_GT(probe.early, 0u);
+  EXPECT_LE(probe.late_max, probe.early + 64 * 1024)
+      << "heap grew from " << probe.early << " to " << probe.late_max << " bytes";
 }
 
 TEST(RunProgram, MissingFileIsAnInputError) {
