@@ -264,44 +264,61 @@ int command_check(const CheckArgs& a) {
 int main_cli(int argc, char** argv) {
   CLI::App app{
       "cncore: a CNC numerical-control kernel on a simulated machine.\n"
-      "G-code -> look-ahead feed planning -> per-cycle interpolation -> axis set-points."};
+      "G-code -> look-ahead feed planning -> per-cycle interpolation -> axis set-points.",
+      "cncore"};
   app.set_version_flag("--version", std::string("cncore ") + CNCORE_VERSION);
   app.require_subcommand(1);
 
   RunArgs ra;
   CLI::App* run = app.add_subcommand(
       "run", "Interpret, plan and interpolate a program; print a summary of the motion.");
-  run->add_option("PROGRAM", ra.program, "Part program (G-code)")->required();
-  run->add_option("--machine", ra.machine, "Machine configuration (TOML); default: built-in");
-  run->add_option("--trajectory", ra.trajectory, "Write one CSV row per interpolation cycle");
-  run->add_option("--summary", ra.summary, "Write the machine-readable summary (JSON)");
+  run->add_option("PROGRAM", ra.program, "Part program (G-code)")
+      ->required()
+      ->type_name("FILE.ngc");
+  run->add_option("--machine", ra.machine, "Machine configuration (TOML); default: built-in")
+      ->type_name("FILE.toml");
+  run->add_option("--trajectory", ra.trajectory, "Write one CSV row per interpolation cycle")
+      ->type_name("FILE.csv");
+  run->add_option("--summary", ra.summary, "Write the machine-readable summary (JSON)")
+      ->type_name("FILE.json");
   run->add_option("--mode", ra.mode, "lookahead (default) or stop (stop at every block)")
-      ->check(CLI::IsMember({"lookahead", "stop"}));
-  run->add_option("--override", ra.override_pct, "Constant feed override, %");
+      ->check(CLI::IsMember({"lookahead", "stop"}))
+      ->type_name("MODE");
+  run->add_option("--override", ra.override_pct, "Constant feed override, %")->type_name("PCT");
   run->add_option("--override-at", ra.override_at,
                   "Override steps TIME:PCT[,TIME:PCT...] (time in s, override in %)")
-      ->allow_extra_args(false);
+      ->allow_extra_args(false)
+      ->type_name("T:PCT[,T:PCT...]");
   run->add_option("--var", ra.vars, "Named parameter #<NAME> = VALUE (NAME=VALUE, repeatable)")
-      ->allow_extra_args(false);
+      ->allow_extra_args(false)
+      ->type_name("NAME=V");
   run->add_option("--param", ra.params, "Numbered parameter #N = VALUE (N=VALUE, repeatable)")
-      ->allow_extra_args(false);
+      ->allow_extra_args(false)
+      ->type_name("N=V");
 
   CheckArgs ca;
   CLI::App* check =
       app.add_subcommand("check", "Interpret a program only and report the first error.");
-  check->add_option("PROGRAM", ca.program, "Part program (G-code)")->required();
+  check->add_option("PROGRAM", ca.program, "Part program (G-code)")
+      ->required()
+      ->type_name("FILE.ngc");
   check->add_flag("--blocks", ca.blocks, "List the interpreted blocks, one per line");
-  check->add_option("--machine", ca.machine, "Machine configuration (TOML); default: built-in");
+  check->add_option("--machine", ca.machine, "Machine configuration (TOML); default: built-in")
+      ->type_name("FILE.toml");
   check->add_option("--var", ca.vars, "Named parameter #<NAME> = VALUE (NAME=VALUE, repeatable)")
-      ->allow_extra_args(false);
+      ->allow_extra_args(false)
+      ->type_name("NAME=V");
   check->add_option("--param", ca.params, "Numbered parameter #N = VALUE (N=VALUE, repeatable)")
-      ->allow_extra_args(false);
+      ->allow_extra_args(false)
+      ->type_name("N=V");
 
   std::string machine_path;
   CLI::App* machine = app.add_subcommand(
       "machine", "Print the machine configuration as TOML (built-in, or the effective one).");
-  machine->add_option("--machine", machine_path,
-                      "Print this configuration file with every default filled in");
+  machine
+      ->add_option("--machine", machine_path,
+                   "Print this configuration file with every default filled in")
+      ->type_name("FILE.toml");
 
   try {
     app.parse(argc, argv);
