@@ -143,6 +143,8 @@ TEST(TrajectoryChecker, CircleHasNormalAccelerationVSquaredOverR) {
   const auto rep = check_trajectory(tr, blocks, Limits{});
   EXPECT_TRUE(rep.ok()) << rep.summary();
   EXPECT_NEAR(rep.max_normal_accel_mm_s2, 250, 0.25);
+  // At 50 mm/s the chord turns by v·τ/R = 0.005 rad = 0.2865° per cycle.
+  EXPECT_NEAR(rep.max_direction_change_deg, 0.005 * 180 / std::numbers::pi, 1e-4);
   EXPECT_LT(rep.max_path_error_mm, 1e-9);
   // Resultant: on the ramps tangential 1000 and normal up to 250 add up to ≤ √(1000² + 250²).
   EXPECT_LE(rep.max_resultant_accel_mm_s2, std::hypot(1000.0, 250.0) + 1);

@@ -57,8 +57,9 @@ std::string CheckReport::summary() const {
     << " mm; max: path error " << max_path_error_mm << " mm, speed " << max_speed_mm_s << " mm/s ("
     << max_speed_ratio << " of limit), tangential " << max_tangential_accel_mm_s2 << ", normal "
     << max_normal_accel_mm_s2 << ", resultant " << max_resultant_accel_mm_s2
-    << " mm/s2, tangential jerk " << max_tangential_jerk_mm_s3 << " mm/s3; end error "
-    << end_error_mm << " mm, end speed " << end_speed_mm_s << " mm/s\n";
+    << " mm/s2, tangential jerk " << max_tangential_jerk_mm_s3 << " mm/s3, direction change "
+    << max_direction_change_deg << " deg/cycle; end error " << end_error_mm << " mm, end speed "
+    << end_speed_mm_s << " mm/s\n";
   for (std::size_t p = 0; p < counts.size(); ++p) {
     if (counts[p] == 0) continue;
     o << "  " << property_name(static_cast<Property>(p)) << ": " << counts[p] << " violations\n";
@@ -333,6 +334,10 @@ CheckReport check_trajectory(const Trajectory& tr, const Path& path, const Limit
       a_n = std::sqrt(l1 * l2) * norm((1.0 / l2) * d2 - (1.0 / l1) * d1) / (tau * tau);
     }
     rep.max_normal_accel_mm_s2 = std::max(rep.max_normal_accel_mm_s2, a_n);
+    if (l1 >= 1e-3 && l2 >= 1e-3 && l1 >= 10 * q && l2 >= 10 * q) {
+      const double ang = std::atan2(norm(cross(d1, d2)), dot(d1, d2)) * 180 / std::numbers::pi;
+      rep.max_direction_change_deg = std::max(rep.max_direction_change_deg, ang);
+    }
     if (a_n > amax * m1 + eps_a) add(Property::kNormalAccel, k, a_n, amax);
     const double a_r = norm(d2 - d1) / (tau * tau);
     rep.max_resultant_accel_mm_s2 = std::max(rep.max_resultant_accel_mm_s2, a_r);

@@ -38,7 +38,9 @@
 //   it) has v ≤ Vg = min(Vb[a], Amax·τ/(2 sin(θ/2)), Vb[b]), Vb = min(Vkind, √(R·Amax)).
 // - P2 axes: per-axis speed ≤ axis limit.
 // - P3: |a_t| ≤ Amax, a_n ≤ Amax, per-axis acceleration ≤ axis limit; tangential jerk ≤ Jmax if
-//   set; resultant ≤ max_resultant_accel_mm_s2 if set.
+//   set; resultant ≤ max_resultant_accel_mm_s2 if set. Per-axis acceleration is checked at every
+//   sample, corners included: a corner passed at Vg (direction change Amax·τ) in the same cycle as
+//   a tangential speed change can exceed an axis limit equal to Amax, and that is reported.
 // - P4: the last sample is within end_tolerance_mm of the programmed end and its arriving speed
 //   is ≤ Amax·τ (one cycle of deceleration to rest); at every intermediate stop point (exact stop,
 //   dwell, waiting M-code) some sample lands within stop_tolerance_mm of it with arriving speed
@@ -112,6 +114,7 @@ struct CheckReport {
   double max_resultant_accel_mm_s2 = 0;
   double max_tangential_jerk_mm_s3 = 0;
   double max_resultant_jerk_mm_s3 = 0;
+  double max_direction_change_deg = 0;  // largest angle between consecutive chords (≥ 1 µm)
   std::array<double, kMaxAxes> max_axis_speed_mm_s{};
   std::array<double, kMaxAxes> max_axis_accel_mm_s2{};
   double end_error_mm = 0;
