@@ -180,6 +180,8 @@ INSTANTIATE_TEST_SUITE_P(
                 "interpreter.max_loop_iterations"},
         BadCase{"[interpreter]\nmax_call_depth = -3\n", 2, 1, "interpreter.max_call_depth"},
         BadCase{"motion = 3\n", 1, 1, "motion must be a table"},
+        BadCase{"[axes]\n", 1, 2, "at least one axis"},
+        BadCase{"[axes.x]\nmin_mm = 0\n[axes.x.foo]\n", 3, 9, "axes.x.foo"},
         BadCase{"name = 3\n", 1, 1, "name"},
         // TOML syntax errors: position of the error, message says so.
         BadCase{"[motion]\nperiod_s = = 1\n", 2, 12, "TOML syntax"},
