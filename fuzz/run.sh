@@ -10,7 +10,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 seconds=${1:-${FUZZ_SECONDS:-60}}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(interpreter tables config)
+[ ${#targets[@]} -gt 0 ] || targets=(interpreter run tables config)
 build=$root/build/fuzz
 
 cmake --preset fuzz -S "$root" >/dev/null || exit 3
@@ -20,9 +20,10 @@ seed() {  # seed TARGET: fill the corpus from the repo's own inputs (idempotent)
   local t=$1 dir=$build/corpus/$1 f
   mkdir -p "$dir"
   case $t in
-    interpreter)
+    interpreter|run)
       for f in "$root"/tests/interpreter/golden/*/program.ngc "$root"/tests/interpreter/reject/*/program.ngc \
-               "$root"/examples/*.ngc "$root"/fuzz/regressions/interpreter/* "$root"/fuzz/regressions/pending/interpreter/*; do
+               "$root"/examples/*.ngc "$root"/fuzz/seeds/run/* "$root"/fuzz/regressions/$t/* \
+               "$root"/fuzz/regressions/pending/$t/*; do
         [ -f "$f" ] && cp "$f" "$dir/seed-$(sha1sum "$f" | cut -c1-16)"
       done ;;
     tables)
@@ -45,7 +46,7 @@ for t in "${targets[@]}"; do
   mkdir -p "$findings"
   before=$(ls "$findings" | wc -l)
   dict=()
-  [ "$t" = interpreter ] && dict=(-dict="$root/fuzz/gcode.dict")
+  [ "$t" = interpreter ] || [ "$t" = run ] && dict=(-dict="$root/fuzz/gcode.dict")
   log=$build/fuzz_$t.log
   echo "== fuzz_$t for ${seconds}s (corpus $(ls "$build/corpus/$t" | wc -l) files)"
   # -fork=1 with -ignore_*: keep fuzzing after a finding (each one is saved to findings/).
