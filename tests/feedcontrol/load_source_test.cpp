@@ -2,12 +2,14 @@
 #include "feedcontrol/load_source.hpp"
 
 #include <gtest/gtest.h>
+#include <rapidcheck.h>
 
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "core/error.hpp"
 
@@ -169,4 +171,24 @@ TEST(PlantLoad, BadSettingsNameTheKey) {
   EXPECT_FALSE(p.find_problem());
   p.noise_pct = std::nan("");
   EXPECT_THROW(p.validate(), InputError);
+}
+
+// Any text either loads or is rejected with InputError: never a crash, never another exception.
+TEST(RecordedLoad, ArbitraryTextLoadsOrIsRejected) {
+  const bool ok = rc::check([] {
+    const auto lines = *rc::gen::container<std::vector<std::string>>(rc::gen::oneOf(
+        rc::gen::element<std::string>("t_s,load_pct", "s_mm,load_pct", "", "# c", "1,2", ",", "3,",
+                                      "x,1", "1e400,1", "-1,5", "2,-0", " 4 , 5 ", "5,6,7"),
+        rc::gen::arbitrary<std::string>()));
+    std::string text;
+    for (const auto& l : lines) text += l + "\n";
+    try {
+      const auto rec = RecordedLoad::parse(text, "load.csv");
+      RC_ASSERT(rec.size() > 0u);
+      RC_ASSERT(std::isfinite(rec.at(0.5)));
+    } catch (const InputError& e) {
+      RC_ASSERT(e.line() >= 1u);
+    }
+  });
+  EXPECT_TRUE(ok);
 }
