@@ -387,6 +387,28 @@ TEST(TrajectoryChecker, RetracedPathKeepsProgressMonotone) {
   EXPECT_NEAR(rep.max_tangential_accel_mm_s2, 1000, 1e-3);
 }
 
+TEST(TrajectoryChecker, HairpinLegWithinTheRoundingIsNotTakenForTheCurrentSegment) {
+  // A → B is a hairpin (B goes back 0.4 µm along A, 10 µm to the side), C carries on backwards. One
+  // cycle goes from A (x = 0.99962) over A's end and all of B onto C, landing 41 µm from A's part
+  // ahead of the previous sample. With CSV rounding (q = 5e-7) the projection once accepted A there
+  // (distance 4.1e-5 ≤ its old snap of 100q) and made up a path error and a joint-speed violation
+  // (seen on camotics/vcarve.ngc).
+  const std::vector<Block> blocks = {line(P(0, 0), P(1, 0), 600, 1),
+                                     line(P(1, 0), P(0.9996, 1e-5), 600, 2),
+                                     line(P(0.9996, 1e-5), P(0.5, 2e-5), 600, 3)};
+  const Path path = build_path(blocks);
+  std::vector<double> s;
+  for (double x = 0.00042; x < path.length_mm; x += 0.0008) s.push_back(x);
+  s.push_back(path.length_mm);
+  Trajectory tr = follow(path, s);
+  tr.position_resolution_mm = 5e-7;
+  const auto rep = check_trajectory(tr, path, Limits{});
+  EXPECT_LT(rep.max_path_error_mm, 1e-9) << rep.summary();
+  // 0.8 mm/s is below the hairpin's Vg = Amax·τ/(2 sin(θ/2)) ≈ 1.0 mm/s: nothing to report.
+  EXPECT_EQ(rep.count(Property::kJointSpeed), 0u) << rep.summary();
+  EXPECT_EQ(rep.count(Property::kTangentialAccel), 0u) << rep.summary();
+}
+
 TEST(TrajectoryCsv, ReadsColumnsByNameInAnyOrder) {
   const std::string file = ::testing::TempDir() + "traj_test.csv";
   {
