@@ -138,6 +138,7 @@ void SummaryObserver::on_sample(const motion::Sample& s) {
   ring_size_ = std::min(ring_size_ + 1, path_ring_.size());
   const Vec3 pos = s.position.xyz();  // disabled slots stay 0 in both
   double contour = norm(pos - path);
+  summary_.max_servo_lag_mm = std::max(summary_.max_servo_lag_mm, contour);
   for (std::size_t k = 1; k < ring_size_ && contour > 0; ++k) {
     const std::size_t newer = (ring_next_ + path_ring_.size() - k) % path_ring_.size();
     const std::size_t older = (newer + path_ring_.size() - 1) % path_ring_.size();
@@ -263,6 +264,7 @@ std::string summary_to_json(const Summary& s, const MachineConfig& machine) {
   j["max_axis_accel_mm_s2"] = accel;
   j["max_axis_speed_mm_min"] = speed;
   j["max_contour_error_mm"] = s.max_contour_error_mm;
+  j["max_servo_lag_mm"] = s.max_servo_lag_mm;
   j["mode"] = s.mode;
   j["cycles"] = s.cycles;
   j["period_s"] = machine.period_s;

@@ -39,6 +39,7 @@ struct Summary {
   std::array<double, kMaxAxes> max_axis_speed_mm_min{};
   std::array<double, kMaxAxes> max_axis_accel_mm_s2{};  // max |Δ²p|/Δt² per axis
   double max_contour_error_mm = 0;  // servo set-point to programmed path (see summary.cpp)
+  double max_servo_lag_mm = 0;      // servo set-point to the same cycle's on-path point
   std::string mode;
   std::vector<std::string> warnings;
   std::vector<SlowSpot> slowest;  // worst first, at most 5

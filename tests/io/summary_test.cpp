@@ -99,6 +99,8 @@ TEST(Summary, ContourErrorIsTheDistanceToThePathNotTheLag) {
   }
   obs.on_finish();
   EXPECT_NEAR(obs.summary().max_contour_error_mm, 0.003, 1e-12);
+  // The lag itself: 5 cycles · 0.1 mm beside 0.003 mm, √(0.5² + 0.003²).
+  EXPECT_NEAR(obs.summary().max_servo_lag_mm, std::hypot(0.5, 0.003), 1e-12);
 }
 
 // Three lines at F6000 (100 mm/s). Line 10 runs 1 s at 50 mm/s: lost 1·(1 − 50/100) = 0.5 s.
