@@ -38,6 +38,9 @@ double AdaptiveFeedLoop::cycle(double t_s, double path_s_mm, double feed_mm_min,
   if (cycles_to_control_ == 0) {
     override_pct_ = controller_.update(last_load_pct_, operator_override_pct);
     cycles_to_control_ = controller_.settings().control_cycles;
+  } else if (!controller_.state().active) {
+    // Idle (not cutting): the operator's override passes at once, not at the next control cycle.
+    override_pct_ = operator_override_pct;
   }
   --cycles_to_control_;
   return override_pct_;

@@ -67,6 +67,28 @@ TEST(Loop, DisabledPassesTheOperatorOverride) {
   EXPECT_DOUBLE_EQ(loop.cycle(0.002, 0, 100, 70), 70);
 }
 
+TEST(Loop, ControlEveryNCyclesButIdlePassThroughAtOnce) {
+  // 5 % (below lm) for 10 ms, then 90 %.
+  auto rec = RecordedLoad::parse("t_s,load_pct\n0,5\n0.0099,5\n0.0100,90\n", "load.csv");
+  AdaptiveFeedLoop loop(settings(), 0.001, 200, rec);   // control every 4 cycles
+  EXPECT_DOUBLE_EQ(loop.cycle(0.000, 0, 0, 100), 100);  // control cycle: idle
+  EXPECT_DOUBLE_EQ(loop.cycle(0.001, 0, 0, 70), 70);    // operator turns the knob: at once
+  EXPECT_DOUBLE_EQ(loop.cycle(0.002, 0, 0, 70), 70);
+  EXPECT_DOUBLE_EQ(loop.cycle(0.003, 0, 0, 70), 70);
+  EXPECT_DOUBLE_EQ(loop.cycle(0.004, 0, 0, 70), 70);             // control cycle, still idle
+  for (int n = 5; n < 12; ++n) loop.cycle(n * 0.001, 0, 0, 70);  // 90 % measured from n = 10
+  // Control cycles at n = 8 (idle) and n = 12: the first active one.
+  const double first = loop.cycle(0.012, 0, 0, 70);
+  // e = −30, Δt = 4 ms: o = Kp·e + Ki·e·Δt + c = −30 − 0.6 + 100 = 69.4.
+  EXPECT_NEAR(first, 69.4, 1e-9);
+  // Held until the next control cycle although the operator's override changes.
+  EXPECT_DOUBLE_EQ(loop.cycle(0.013, 0, 0, 50), first);
+  EXPECT_DOUBLE_EQ(loop.cycle(0.014, 0, 0, 50), first);
+  EXPECT_DOUBLE_EQ(loop.cycle(0.015, 0, 0, 50), first);
+  // Next control cycle: I = 2·(−30·0.004) → o = −30 − 1.2 + 100 = 68.8.
+  EXPECT_NEAR(loop.cycle(0.016, 0, 0, 50), 68.8, 1e-9);
+}
+
 TEST(Loop, InvalidSettingsAreRejectedAtConstruction) {
   auto rec = RecordedLoad::parse("t_s,load_pct\n0,90\n", "load.csv");
   AdaptiveSettings s = settings();
