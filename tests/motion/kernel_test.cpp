@@ -2,6 +2,8 @@
 // (tests/support: finite differences of the output positions against the programmed blocks) —
 // P1–P5 of spec 01 on the seed's example and on the shapes that stress a look-ahead.
 #include <gtest/gtest.h>
+#include <rapidcheck.h>
+#include <rapidcheck/gtest.h>
 
 #include <algorithm>
 #include <chrono>
@@ -416,6 +418,81 @@ TEST(Kernel, LookaheadIsMuchFasterThanStopMode) {
                 st.time_s(), st.time_s() / la.time_s());
     EXPECT_GT(st.time_s(), c.min_ratio * la.time_s()) << c.name;
   }
+}
+
+// Random programs (lines, arcs and helices in any plane, rapids, segment lengths from 1 µm to
+// 30 mm, random feeds, exact stops) with random override steps, in both modes: every
+// property of the checker holds, the end is exact, and the O(log n) look-ahead gives the same
+// limit as the plain walk in every cycle.
+RC_GTEST_PROP(Kernel, RandomProgramsWithOverrideSteps, ()) {
+  MachineConfig m = test_machine();
+  m.lookahead_blocks = *rc::gen::inRange(16, 40);  // 4..15: see docs/lookahead.md "left"
+  const Mode mode = *rc::gen::element(Mode::kLookahead, Mode::kStop);
+  Prog p;
+  const int n = *rc::gen::inRange(1, 14);
+  for (int i = 0; i < n; ++i) {
+    const int kind = *rc::gen::inRange(0, 10);
+    const double scale = *rc::gen::element(1e-3, 0.05, 0.5, 5.0, 30.0);
+    const double dx = scale * (*rc::gen::inRange(-1000, 1001)) / 1000.0;
+    const double dy = scale * (*rc::gen::inRange(-1000, 1001)) / 1000.0;
+    const double dz = scale * (*rc::gen::inRange(-300, 301)) / 1000.0;
+    const double feed = *rc::gen::element(500.0, 3000.0, 8000.0, 10000.0, 20000.0);
+    const Vec3 at = p.pos.xyz();
+    const Vec3 to = at + Vec3{dx, dy, dz};
+    if (kind < 5) {
+      p.line_to(to, feed,
+                *rc::gen::element(PathMode::kBlend, PathMode::kBlend, PathMode::kExactStop,
+                                  PathMode::kExactPath));
+    } else if (kind < 6) {
+      p.rapid_to(to);
+    } else {
+      // Arc or helix about a random centre in a random principal plane.
+      const Vec3 normal =
+          *rc::gen::element(Vec3{0, 0, 1}, Vec3{0, 0, -1}, Vec3{0, 1, 0}, Vec3{-1, 0, 0});
+      const double r = std::max(0.01, scale * (0.1 + (*rc::gen::inRange(0, 1000)) / 1000.0));
+      // Centre offset perpendicular to the normal.
+      const Vec3 off =
+          normal.z != 0 ? Vec3{r, 0, 0} : (normal.y != 0 ? Vec3{0, 0, r} : Vec3{0, r, 0});
+      const Vec3 centre = at + off;
+      const double ang = (*rc::gen::inRange(1, 700)) / 100.0;
+      // End point: rotate (at − centre) about the normal by ang, plus a rise along it.
+      const Vec3 v = at - centre;
+      const Vec3 w = cross(normal, v);
+      const double rise = *rc::gen::element(0.0, 0.0, dz);
+      const Vec3 end = centre + std::cos(ang) * v + std::sin(ang) * w + rise * normal;
+      p.arc_to(end, centre, feed, normal, *rc::gen::element(0u, 0u, 0u, 1u));
+    }
+  }
+  RunOpts o = opts(mode);
+  o.kernel.check_reference_walk = mode == Mode::kLookahead;
+  const int steps = *rc::gen::inRange(0, 6);
+  for (int i = 0; i < steps; ++i) {
+    o.override_steps.emplace_back((*rc::gen::inRange(0, 2000)) / 1000.0,
+                                  *rc::gen::element(0.0, 10.0, 50.0, 100.0, 150.0, 200.0));
+  }
+  std::sort(o.override_steps.begin(), o.override_steps.end());
+  if (!o.override_steps.empty()) o.override_steps.emplace_back(2.5, 100.0);  // never stuck at 0
+  const RunResult r = run(m, p.blocks, o);
+  const auto rep = check(m, p.blocks, r);
+  if (!rep.ok()) {
+    RC_LOG() << rep.summary() << " mode " << static_cast<int>(mode) << " buffer "
+             << m.lookahead_blocks << "\n";
+    for (const Block& b : p.blocks) {
+      RC_LOG() << "kind " << static_cast<int>(b.kind) << " line " << b.line << " (" << b.start[0]
+               << "," << b.start[1] << "," << b.start[2] << ") -> (" << b.end[0] << "," << b.end[1]
+               << "," << b.end[2] << ") c (" << b.center.x << "," << b.center.y << "," << b.center.z
+               << ") n (" << b.normal.x << "," << b.normal.y << "," << b.normal.z << ") turns "
+               << b.turns << " F " << b.feed_mm_min << " mode " << static_cast<int>(b.path_mode)
+               << "\n";
+    }
+    for (const auto& [t, pct] : o.override_steps)
+      RC_LOG() << "override " << t << " " << pct << "\n";
+  }
+  RC_ASSERT(rep.ok());
+  RC_ASSERT(r.mismatches == 0u);
+  for (std::size_t i = 0; i < 3; ++i)
+    RC_ASSERT(std::abs(r.samples.back().position[i] - p.pos[i]) <= 1e-9);
+  RC_ASSERT(r.samples.back().feed_mm_min == 0.0);
 }
 
 }  // namespace

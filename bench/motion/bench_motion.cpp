@@ -1,0 +1,129 @@
+// Motion-kernel throughput (issue 3, spec 01 P7): interpolation cycles per second without any
+// trajectory output, the worst single cycle with a 10 000-block look-ahead window, and the same
+// path cut into 100× finer segments (the cost per cycle must not grow with segment count).
+#include <benchmark/benchmark.h>
+#include <time.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "config/machine_config.hpp"
+#include "core/block.hpp"
+#include "motion/kernel.hpp"
+
+namespace {
+
+using namespace cncore;
+
+MachineConfig machine() {
+  MachineConfig m;  // 10 000 mm/min, 2 000 mm/s², 1 ms, look-ahead 10 000 blocks
+  for (std::size_t i = 0; i < 3; ++i) {
+    m.axes[i].enabled = true;
+    m.axes[i].max_speed_mm_min = 20000;
+    m.axes[i].max_accel_mm_s2 = 10000;
+  }
+  return m;
+}
+
+// A random path of `segments` segments (0.5–5 mm, turns up to ±20°, so the look-ahead runs at
+// speed), each cut into `refine` equal pieces: the same geometry in refine× more blocks.
+std::vector<Block> random_path(int segments, int refine) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> len(0.5, 5.0), turn(-0.35, 0.35);
+  std::vector<Block> out;
+  out.reserve(static_cast<std::size_t>(segments) * static_cast<std::size_t>(refine));
+  AxisVec p;
+  double heading = 0;
+  std::uint32_t line = 1;
+  for (int i = 0; i < segments; ++i) {
+    heading += turn(rng);
+    const double l = len(rng);
+    const Vec3 d{l * std::cos(heading), l * std::sin(heading), 0};
+    const Vec3 a = p.xyz();
+    for (int k = 1; k <= refine; ++k) {
+      Block b;
+      b.kind = BlockKind::kLine;
+      b.line = line++;
+      b.start = p;
+      b.end.set_xyz(a + (static_cast<double>(k) / refine) * d);
+      b.feed_mm_min = 10000;
+      out.push_back(b);
+      p = b.end;
+    }
+  }
+  return out;
+}
+
+struct RunStats {
+  std::uint64_t cycles = 0;
+  double worst_cycle_s = 0;  // thread CPU time of the slowest step() (preemption excluded)
+  double step_s = 0;         // thread CPU time in step() only (without pushing blocks)
+};
+
+double thread_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// Runs the whole program; `time_each` measures every step() separately (worst cycle).
+RunStats run(const std::vector<Block>& blocks, bool time_each) {
+  const MachineConfig m = machine();
+  motion::Kernel k(m, {});
+  std::size_t next = 0;
+  motion::Sample s;
+  RunStats st;
+  for (;;) {
+    while (next < blocks.size() && k.wants_block()) k.push(blocks[next++]);
+    if (next == blocks.size()) k.end_of_program();
+    if (time_each) {
+      const double t0 = thread_cpu_s();
+      const bool more = k.step(s);
+      const double dt = thread_cpu_s() - t0;
+      if (!more) break;
+      st.worst_cycle_s = std::max(st.worst_cycle_s, dt);
+      st.step_s += dt;
+    } else if (!k.step(s)) {
+      break;
+    }
+    benchmark::DoNotOptimize(s);
+    ++st.cycles;
+  }
+  return st;
+}
+
+// Cycles per second: the run includes pushing the blocks (the interpreter's output), as the
+// simulation does. Arg: refine factor (1 or 100).
+void BM_KernelCycles(benchmark::State& state) {
+  const auto blocks = random_path(2000, static_cast<int>(state.range(0)));
+  std::uint64_t cycles = 0;
+  for (auto _ : state) cycles += run(blocks, false).cycles;
+  state.counters["cycles_per_s"] =
+      benchmark::Counter(static_cast<double>(cycles), benchmark::Counter::kIsRate);
+  state.counters["blocks"] = static_cast<double>(blocks.size());
+}
+BENCHMARK(BM_KernelCycles)->Arg(1)->Arg(100)->Unit(benchmark::kMillisecond);
+
+// Worst single step() with a full 10 000-block window (the 100× finer path keeps it full).
+void BM_KernelWorstCycle(benchmark::State& state) {
+  const auto blocks = random_path(2000, static_cast<int>(state.range(0)));
+  double worst = 0, step_s = 0;
+  std::uint64_t cycles = 0;
+  for (auto _ : state) {
+    const RunStats st = run(blocks, true);
+    worst = std::max(worst, st.worst_cycle_s);
+    step_s += st.step_s;
+    cycles += st.cycles;
+  }
+  state.counters["worst_cycle_us"] = worst * 1e6;
+  // step() alone (includes ~2 clock reads per cycle, so it understates the rate).
+  state.counters["step_only_cycles_per_s"] = static_cast<double>(cycles) / step_s;
+}
+BENCHMARK(BM_KernelWorstCycle)->Arg(1)->Arg(100)->Unit(benchmark::kMillisecond)->Iterations(2);
+
+}  // namespace
+
+BENCHMARK_MAIN();
