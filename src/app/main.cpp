@@ -241,19 +241,25 @@ int command_check(const CheckArgs& a) {
   Block b;
   std::uint64_t blocks = 0, motion = 0;
   std::string out;
-  while (interpreter.next(b)) {
-    ++blocks;
-    if (b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc) {
-      ++motion;
-    }
-    if (a.blocks) {
-      out += interp::format_block(b, machine);
-      out += '\n';
-      if (out.size() > (1 << 16)) {
-        std::fwrite(out.data(), 1, out.size(), stdout);
-        out.clear();
+  auto flush = [&out] {
+    std::fwrite(out.data(), 1, out.size(), stdout);
+    out.clear();
+  };
+  try {
+    while (interpreter.next(b)) {
+      ++blocks;
+      if (b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc) {
+        ++motion;
+      }
+      if (a.blocks) {
+        out += interp::format_block(b, machine);
+        out += '\n';
+        if (out.size() > (1 << 16)) flush();
       }
     }
+  } catch (const InputError&) {
+    flush();  // the blocks before the error are listed, then the error goes to stderr
+    throw;
   }
   if (!a.blocks) out = fmt::format("{}: ok, {} blocks ({} motion)\n", a.program, blocks, motion);
   std::fwrite(out.data(), 1, out.size(), stdout);

@@ -245,6 +245,12 @@ TEST_F(Cli, CheckListsTheBlocks) {
   ASSERT_EQ(r.code, 0) << r.err;
   const auto lines = std::count(r.out.begin(), r.out.end(), '\n');
   EXPECT_GE(lines, 3);  // line, arc, line (+ the M30 event if listed)
+  // On an error the blocks before it are still listed.
+  write(dir_ / "e.ngc", "G1 X1 F100\nG1 X2\nG2 X3\n");
+  const Result e = run("check --blocks e.ngc");
+  EXPECT_EQ(e.code, 1);
+  EXPECT_EQ(std::count(e.out.begin(), e.out.end(), '\n'), 2) << e.out;
+  EXPECT_EQ(e.err.rfind("e.ngc:3:", 0), 0u) << e.err;
   const Result plain = run("check " + example("seed-line-arc-line.ngc"));
   EXPECT_EQ(plain.code, 0);
   EXPECT_NE(plain.out.find("ok"), std::string::npos);
