@@ -29,8 +29,26 @@ void MovingAverageAccDec::on_joint(std::uint64_t index_a, const Segment& a, cons
   const double span = lim_.span_cycles() + post;
   const double c = a.end_mm();
   // Geometric cap Vg (corner, arc, axis limits, contour tolerance): OR-independent.
-  const double vg = planner::joint_speed_pc(a, b, lim_);
-  la_.insert(2 * slot, CapPoint{c, vg, false, span, c + vg * post}, cmd_mm_);
+  double vg = planner::joint_speed_pc(a, b, lim_);
+  // A segment shorter than one cycle's travel lets one cycle turn two corners at once (the
+  // direction changes from the end of the segment before it to the start of the one after).
+  // Either the speed stays ≤ its length (no cycle skips it) or the combined turn is allowed.
+  if (prev_.valid && prev_.index_b == index_a && a.length_mm < vg) {
+    const double both = planner::turn_speed_pc(prev_.end_dir, b.start_direction(), lim_);
+    const double cap = std::max(a.length_mm, both);
+    if (cap < vg) vg = cap;
+    const std::size_t ps = buf_.slot(prev_.index_a);
+    if (cap < prev_.vg && la_.live(2 * ps) && !la_.point(2 * ps).feed) {
+      CapPoint p = la_.point(2 * ps);
+      if (cap < p.value) {
+        p.value = cap;
+        p.release_mm = p.c_mm + cap * post;
+        la_.insert(2 * ps, p, cmd_mm_);
+      }
+    }
+  }
+  vg = la_.insert(2 * slot, CapPoint{c, vg, false, span, c + vg * post}, cmd_mm_);
+  prev_ = {true, index_a, buf_.end_index() - 1, a.end_direction(), vg};
   // Feed cap: where the programmed feed changes, the lower of the two feeds holds from the
   // range start until the tool has passed the joint (so the tool is never faster than the
   // feed of the block it is in).

@@ -79,6 +79,13 @@ class MovingAverageAccDec final : public AccDec {
   // joints that are corners), and its second-to-last sample is visibly short of the stop.
   double last_step_ = 0;
   std::uint64_t mismatches_ = 0;
+  // The previous joint (a → b), for two corners within one cycle.
+  struct PrevJoint {
+    bool valid = false;
+    std::uint64_t index_a = 0, index_b = 0;
+    AxisVec end_dir;  // direction at the end of a
+    double vg = 0;
+  } prev_;
 };
 
 }  // namespace cncore::motion

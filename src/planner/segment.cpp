@@ -159,7 +159,10 @@ Segment make_motion_segment(const Block& b, const Limits& lim) {
     // curvature, so the normal acceleration v²/ρ stays below Amax with room).
     const double rho = 0.5 * (s.r0 + s.r1);
     if (!lim.bound_resultant) {
-      vb = std::min(vb, std::sqrt(rho * a));  // v²/R ≤ Amax
+      // v²/R ≤ Amax, with 1/T kept for the ramp inside the arc: while the speed changes by
+      // up to v/T per cycle, consecutive chords differ by that much and the direction change
+      // measured over two chords reads up to (1 + 1/T)·v²/R.
+      vb = std::min(vb, std::sqrt(rho * a / (1 + 1 / t)));
     } else {
       // (v²/ρ)² + (v/T)² ≤ Amax²: normal plus the filter's tangential ramp (≤ Vb/T per cycle).
       const double it2 = 1 / (t * t);
@@ -200,14 +203,11 @@ double corner_rounding_mm(double v_pc, double sin_theta, std::uint32_t tp_cycles
   return v_pc * (tp_cycles + 1) * sin_theta / 8;
 }
 
-double joint_speed_pc(const Segment& a, const Segment& b, const Limits& lim) {
-  const AxisVec e = a.end_direction();
-  const AxisVec s = b.start_direction();
-  double v = std::min(a.vb_pc, b.vb_pc);
+double turn_speed_pc(const AxisVec& e, const AxisVec& s, const Limits& lim) {
+  double v = kInf;
   // Path corner: the velocity turns from v·E to v·S within one cycle, |Δv| = v·|S − E| =
   // 2·v·sin(θ/2) ≤ Amax·τ  ⇒  V = Amax·τ / |S − E| (per-cycle units: Amax·τ²).
-  const Vec3 dxyz = s.xyz() - e.xyz();
-  const double turn = norm(dxyz);
+  const double turn = norm(s.xyz() - e.xyz());
   if (turn > kTiny) v = std::min(v, lim.amax_pc2 / turn);
   for (std::size_t i = 0; i < kMaxAxes; ++i) {
     const double di = std::abs(s[i] - e[i]);
@@ -215,6 +215,14 @@ double joint_speed_pc(const Segment& a, const Segment& b, const Limits& lim) {
       v = std::min(v, lim.axis_amax_pc2[i] / di);
     }
   }
+  return v;
+}
+
+double joint_speed_pc(const Segment& a, const Segment& b, const Limits& lim) {
+  const AxisVec e = a.end_direction();
+  const AxisVec s = b.start_direction();
+  double v = std::min({a.vb_pc, b.vb_pc, turn_speed_pc(e, s, lim)});
+  const double turn = norm(s.xyz() - e.xyz());
   if (lim.post_filter() && turn > 1e-9) {
     const double tol = std::min(a.tol_mm, b.tol_mm);
     const double sin_theta = norm(cross(e.xyz(), s.xyz()));

@@ -426,7 +426,7 @@ TEST(Kernel, LookaheadIsMuchFasterThanStopMode) {
 // limit as the plain walk in every cycle.
 RC_GTEST_PROP(Kernel, RandomProgramsWithOverrideSteps, ()) {
   MachineConfig m = test_machine();
-  m.lookahead_blocks = *rc::gen::inRange(16, 40);  // 4..15: see docs/lookahead.md "left"
+  m.lookahead_blocks = *rc::gen::inRange(4, 40);
   const Mode mode = *rc::gen::element(Mode::kLookahead, Mode::kStop);
   Prog p;
   const int n = *rc::gen::inRange(1, 14);
@@ -449,7 +449,7 @@ RC_GTEST_PROP(Kernel, RandomProgramsWithOverrideSteps, ()) {
       // Arc or helix about a random centre in a random principal plane.
       const Vec3 normal =
           *rc::gen::element(Vec3{0, 0, 1}, Vec3{0, 0, -1}, Vec3{0, 1, 0}, Vec3{-1, 0, 0});
-      const double r = std::max(0.01, scale * (0.1 + (*rc::gen::inRange(0, 1000)) / 1000.0));
+      const double r = std::max(0.05, scale * (0.1 + (*rc::gen::inRange(0, 1000)) / 1000.0));
       // Centre offset perpendicular to the normal.
       const Vec3 off =
           normal.z != 0 ? Vec3{r, 0, 0} : (normal.y != 0 ? Vec3{0, 0, r} : Vec3{0, r, 0});

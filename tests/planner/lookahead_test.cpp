@@ -145,8 +145,9 @@ TEST(Segment, ArcShapeSpeedLengthAndEndPoint) {
   arc.feed_mm_min = 10000;
   const Segment s = make_motion_segment(arc, l);
   EXPECT_NEAR(s.length_mm, std::sqrt(std::pow(5 * std::numbers::pi, 2) + 4), 1e-12);
-  // Vb = √(R·Amax) = √(5 · 2000) = 100 mm/s = 0.1 mm/cycle.
-  EXPECT_NEAR(s.vb_pc, 0.1, 1e-12);
+  // Vb = √(R·Amax/(1 + 1/T)) = √(5 · 2000 / (1 + 1/84)) = 99.41 mm/s (the 1/T is kept for the
+  // tangential ramp inside the arc, see segment.cpp).
+  EXPECT_NEAR(s.vb_pc, 0.1 / std::sqrt(1 + 1.0 / 84), 1e-12);
   const AxisVec mid = s.point_at(s.length_mm / 2);
   EXPECT_NEAR(mid[kX], 0, 1e-12);
   EXPECT_NEAR(mid[kY], 5, 1e-12);
