@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -377,10 +378,12 @@ long peak_rss_kb() {
 
 TEST(EdgeLongProgram, MillionsOfBlocksAtFlatMemory) {
 #ifdef CNCORE_EDGE_ASAN
-  const std::uint64_t n_blocks = 300000;  // the ASan build is ~10x slower
+  std::uint64_t n_blocks = 300000;  // the ASan build is ~10x slower
 #else
-  const std::uint64_t n_blocks = 2000000;
+  std::uint64_t n_blocks = 2000000;
 #endif
+  // By hand: CNCORE_EDGE_BLOCKS=10000000 edge_tests --gtest_filter='EdgeLongProgram*'
+  if (const char* e = std::getenv("CNCORE_EDGE_BLOCKS")) n_blocks = std::stoull(e);
   const auto path = std::filesystem::path(CNCORE_EDGE_TMP_DIR) / "long.ngc";
   {
     // A zigzag: block i goes to X = i mod 100 (mm), Y = i / 1000 (a slow climb).
