@@ -34,7 +34,12 @@ void MovingAverageAccDec::on_joint(std::uint64_t index_a, const Segment& a, cons
   // direction changes from the end of the segment before it to the start of the one after).
   // Either the speed stays ≤ its length (no cycle skips it) or the combined turn is allowed.
   if (prev_.valid && prev_.index_b == index_a && a.length_mm < vg) {
-    const double both = planner::turn_speed_pc(prev_.end_dir, b.start_direction(), lim_);
+    // After another short segment a cycle may cross three joints: the turn from the end of
+    // the segment before that one counts too (longer chains of skipped segments: see docs).
+    double both = planner::turn_speed_pc(prev_.end_dir, b.start_direction(), lim_);
+    if (prev_.short_a) {
+      both = std::min(both, planner::turn_speed_pc(prev_.end_dir2, b.start_direction(), lim_));
+    }
     const double cap = std::max(a.length_mm, both);
     if (cap < vg) vg = cap;
     const std::size_t ps = buf_.slot(prev_.index_a);
@@ -48,7 +53,9 @@ void MovingAverageAccDec::on_joint(std::uint64_t index_a, const Segment& a, cons
     }
   }
   vg = la_.insert(2 * slot, CapPoint{c, vg, false, span, c + vg * post}, cmd_mm_);
-  prev_ = {true, index_a, buf_.end_index() - 1, a.end_direction(), vg};
+  const AxisVec before =
+      prev_.valid && prev_.index_b == index_a ? prev_.end_dir : a.end_direction();
+  prev_ = {true, index_a, buf_.end_index() - 1, a.end_direction(), before, vg, a.length_mm < vg};
   // Feed cap: where the programmed feed changes, the lower of the two feeds holds from the
   // range start until the tool has passed the joint (so the tool is never faster than the
   // feed of the block it is in).

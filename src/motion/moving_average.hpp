@@ -83,8 +83,10 @@ class MovingAverageAccDec final : public AccDec {
   struct PrevJoint {
     bool valid = false;
     std::uint64_t index_a = 0, index_b = 0;
-    AxisVec end_dir;  // direction at the end of a
+    AxisVec end_dir;   // direction at the end of a
+    AxisVec end_dir2;  // direction at the end of the segment before a
     double vg = 0;
+    bool short_a = false;  // a is shorter than the passing speed (one cycle can skip it)
   } prev_;
 };
 

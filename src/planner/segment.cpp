@@ -203,16 +203,22 @@ double corner_rounding_mm(double v_pc, double sin_theta, std::uint32_t tp_cycles
   return v_pc * (tp_cycles + 1) * sin_theta / 8;
 }
 
-double turn_speed_pc(const AxisVec& e, const AxisVec& s, const Limits& lim) {
+double turn_speed_pc(const AxisVec& e, const AxisVec& s, const Limits& lim, double curvature) {
   double v = kInf;
   // Path corner: the velocity turns from v·E to v·S within one cycle, |Δv| = v·|S − E| =
-  // 2·v·sin(θ/2) ≤ Amax·τ  ⇒  V = Amax·τ / |S − E| (per-cycle units: Amax·τ²).
+  // 2·v·sin(θ/2) ≤ Amax·τ  ⇒  V = Amax·τ / |S − E| (per-cycle units: Amax·τ²). Next to an arc
+  // the chords also turn by up to v·κ (κ = 1/R of the arcs on both sides) in that cycle:
+  // v·(|S − E| + v·κ) ≤ Amax, solved as 2A / (d + √(d² + 4Aκ)).
+  auto limit = [curvature](double a, double d) {
+    const double den = d + std::sqrt(d * d + 4 * a * curvature);
+    return den > 0 ? 2 * a / den : kInf;
+  };
   const double turn = norm(s.xyz() - e.xyz());
-  if (turn > kTiny) v = std::min(v, lim.amax_pc2 / turn);
+  if (turn > kTiny) v = std::min(v, limit(lim.amax_pc2, turn));
   for (std::size_t i = 0; i < kMaxAxes; ++i) {
     const double di = std::abs(s[i] - e[i]);
     if (lim.axis_on[i] && lim.axis_amax_pc2[i] > 0 && di > kTiny) {
-      v = std::min(v, lim.axis_amax_pc2[i] / di);
+      v = std::min(v, limit(lim.axis_amax_pc2[i], di));
     }
   }
   return v;
@@ -221,7 +227,8 @@ double turn_speed_pc(const AxisVec& e, const AxisVec& s, const Limits& lim) {
 double joint_speed_pc(const Segment& a, const Segment& b, const Limits& lim) {
   const AxisVec e = a.end_direction();
   const AxisVec s = b.start_direction();
-  double v = std::min({a.vb_pc, b.vb_pc, turn_speed_pc(e, s, lim)});
+  const double kappa = (a.arc ? 1 / a.rho_mm : 0.0) + (b.arc ? 1 / b.rho_mm : 0.0);
+  double v = std::min({a.vb_pc, b.vb_pc, turn_speed_pc(e, s, lim, kappa)});
   const double turn = norm(s.xyz() - e.xyz());
   if (lim.post_filter() && turn > 1e-9) {
     const double tol = std::min(a.tol_mm, b.tol_mm);

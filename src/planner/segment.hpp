@@ -86,8 +86,10 @@ Segment make_motion_segment(const Block& block, const Limits& limits);
 // a_i·τ/|S_i − E_i|, min with both Vb's and, with the post filter, the contour-tolerance limit.
 double joint_speed_pc(const Segment& a, const Segment& b, const Limits& limits);
 
-// Corner limit alone for a turn from direction e to direction s within one cycle.
-double turn_speed_pc(const AxisVec& e, const AxisVec& s, const Limits& limits);
+// Corner limit alone for a turn from direction e to direction s within one cycle; `curvature`
+// (1/mm): the arcs' own turning next to the corner (0 between lines).
+double turn_speed_pc(const AxisVec& e, const AxisVec& s, const Limits& limits,
+                     double curvature = 0);
 
 // Contour error of a corner of angle θ passed at speed ≤ v (mm/cycle) for Tp cycles on both
 // sides, through a Tp-cycle moving average: e ≤ v·(Tp + 1)·sin θ / 8.
