@@ -357,6 +357,26 @@ TEST(EdgeTinyFeed, OneMicroMillimetrePerMinuteMovesAtThatSpeed) {
   EXPECT_GT(p.last.position[kX], 0);
 }
 
+TEST(EdgeTinyFeed, AtAMillionMillimetresTheStepsBelowTheDoubleSpacingStillAddUp) {
+  // At X = 1e6 mm the spacing of doubles is 1.16e-10 mm, seven times the 1.67e-11 mm that
+  // 1e-6 mm/min moves per cycle: the position must still advance at the programmed rate (the
+  // kernel must not lose the sub-spacing steps, and the run driver's stall watchdog, 60 s
+  // without motion, must not fire).
+  MachineConfig m = big_machine(2e6, 10000, 2000);
+  m.start_position[kX] = 1e6;
+  Probe p;
+  p.period_s = m.period_s;
+  p.max_cycles = 300000;
+  p.keep = false;
+  const std::string path =
+      program_file("tiny_feed_far.ngc", "G21 G90\nG1 X1000001 F0.000001\nM30\n");
+  EXPECT_THROW(sim::run_program(path, m, {}, {&p}), StopRun);
+  EXPECT_FALSE(p.non_finite);
+  // 300 s at 1e-6/60 mm/s = 5.0e-6 mm, minus half the 0.08 s ramp: within one spacing + 1 s.
+  const double rate_mm_s = 1e-6 / 60;
+  EXPECT_NEAR(p.last.position[kX] - 1e6, rate_mm_s * p.last.t_s, rate_mm_s * 1.0 + 2.4e-10);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Millions of blocks through the interpreter at flat memory
 
