@@ -35,7 +35,7 @@ struct Sample {
   std::uint32_t line = 0;  // source line of the block being executed, 0 when none
   AxisVec position;        // axis set-points sent to the servos (after post-interpolation acc/dec)
   AxisVec path_position;   // the interpolated point on the programmed path (before it)
-  double feed_mm_min = 0;  // commanded path speed this cycle
+  double feed_mm_min = 0;  // path speed of path_position this cycle (after the acc/dec filter)
   double override_pct = 100;
   // Optional channels (specs 03, 04); NaN when the feature is not active.
   double correction = std::nan("");

@@ -358,6 +358,28 @@ TEST_P(BothModes, RotaryAxesMoveLinearly) {
   expect_ends(r, AxisVec{}, p.pos);
 }
 
+// KernelOptions::bound_resultant_accel: on arcs √(a_t² + a_n²) ≤ Amax instead of each ≤ Amax.
+TEST(Kernel, ResultantAccelerationBoundOnArcs) {
+  const MachineConfig m = test_machine();
+  Prog p;
+  p.line_to(Vec3{20, 0, 0}, 10000);
+  p.arc_to(Vec3{20, 20, 0}, Vec3{20, 10, 0}, 10000);              // R 10, tangent entry
+  p.arc_to(Vec3{20, 22, 0}, Vec3{20, 21, 0}, 10000, {0, 0, -1});  // R 1, reversing curvature
+  p.line_to(Vec3{0, 22, 0}, 10000);
+  RunOpts o;
+  const RunResult seed_way = run(m, p.blocks, o);
+  o.kernel.bound_resultant_accel = true;
+  const RunResult bounded = run(m, p.blocks, o);
+  auto lim = testing::limits_from_config(m);
+  const auto rep_seed = testing::check_trajectory(seed_way.traj, p.blocks, lim);
+  lim.max_resultant_accel_mm_s2 = m.max_accel_mm_s2;
+  const auto rep = testing::check_trajectory(bounded.traj, p.blocks, lim);
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+  EXPECT_LE(rep.max_resultant_accel_mm_s2, m.max_accel_mm_s2 * 1.005);
+  std::printf("resultant acceleration: %.0f mm/s² (each bounded), %.0f mm/s² (resultant bounded)\n",
+              rep_seed.max_resultant_accel_mm_s2, rep.max_resultant_accel_mm_s2);
+}
+
 // Post-interpolation filter: the corners are rounded, and the measured distance to the
 // programmed path stays within the contour tolerance (the checker uses it as P1's tolerance).
 TEST(Kernel, PostFilterKeepsTheContourTolerance) {
