@@ -40,19 +40,30 @@ void MovingAverageAccDec::on_joint(std::uint64_t index_a, const Segment& a, cons
     if (prev_.short_a) {
       both = std::min(both, planner::turn_speed_pc(prev_.end_dir2, b.start_direction(), lim_));
     }
-    const double cap = std::max(a.length_mm, both);
-    if (cap < vg) vg = cap;
-    const std::size_t ps = buf_.slot(prev_.index_a);
-    if (cap < prev_.vg && la_.live(2 * ps) && !la_.point(2 * ps).feed) {
-      CapPoint p = la_.point(2 * ps);
-      if (cap < p.value) {
-        p.value = cap;
-        p.release_mm = p.c_mm + cap * post;
-        la_.insert(2 * ps, p, cmd_mm_);
+    // Needed only if the combined turn allows less than the caps the tool already obeys when
+    // it crosses these joints (e.g. a corner followed by a straight joint needs nothing more).
+    if (both < std::min(prev_.vg, vg)) {
+      const double cap = std::max(a.length_mm, both);
+      if (cap < vg) vg = cap;
+      const std::size_t ps = buf_.slot(prev_.index_a);
+      if (cap < prev_.vg && la_.live(2 * ps) && !la_.point(2 * ps).feed) {
+        CapPoint p = la_.point(2 * ps);
+        if (cap < p.value) {
+          p.value = cap;
+          p.release_mm = p.c_mm + cap * post;
+          la_.insert(2 * ps, p, cmd_mm_);
+        }
       }
     }
   }
-  vg = la_.insert(2 * slot, CapPoint{c, vg, false, span, c + vg * post}, cmd_mm_);
+  // A joint whose cap is not below the Vb of either side (same Vb, no corner to speak of)
+  // limits nothing the limiter does not already: while the tool is in a block of a run of such
+  // joints every commanded step is ≤ that common Vb, and the first joint where Vb or the
+  // direction changes gets its own point. Leaving these out keeps fine straight or gently
+  // curved paths (CAM) from paying tree updates for every segment.
+  if (vg < std::max(a.vb_pc, b.vb_pc)) {
+    vg = la_.insert(2 * slot, CapPoint{c, vg, false, span, c + vg * post}, cmd_mm_);
+  }
   const AxisVec before =
       prev_.valid && prev_.index_b == index_a ? prev_.end_dir : a.end_direction();
   prev_ = {true, index_a, buf_.end_index() - 1, a.end_direction(), before, vg, a.length_mm < vg};
