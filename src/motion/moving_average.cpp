@@ -9,6 +9,8 @@ using planner::CapPoint;
 using planner::ItemKind;
 using planner::Segment;
 
+constexpr double kNoCap = std::numeric_limits<double>::infinity();
+
 MovingAverageAccDec::MovingAverageAccDec(const planner::SegmentBuffer& buffer,
                                          const planner::Limits& limits, Mode mode, double or_max,
                                          bool check_reference_walk)
@@ -36,13 +38,16 @@ void MovingAverageAccDec::on_joint(std::uint64_t index_a, const Segment& a, cons
   if (prev_.valid && prev_.index_b == index_a && a.length_mm < vg) {
     // After another short segment a cycle may cross three joints: the turn from the end of
     // the segment before that one counts too (longer chains of skipped segments: see docs).
-    double both = planner::turn_speed_pc(prev_.end_dir, b.start_direction(), lim_);
+    // Each combined turn is needed only if it allows less than the caps the tool already obeys
+    // when it crosses those joints (a corner next to straight joints needs nothing more); 0.999
+    // keeps rounding noise out.
+    const double pair = planner::turn_speed_pc(prev_.end_dir, b.start_direction(), lim_);
+    double both = pair < 0.999 * std::min(prev_.vg, vg) ? pair : kNoCap;
     if (prev_.short_a) {
-      both = std::min(both, planner::turn_speed_pc(prev_.end_dir2, b.start_direction(), lim_));
+      const double triple = planner::turn_speed_pc(prev_.end_dir2, b.start_direction(), lim_);
+      if (triple < 0.999 * std::min({prev_.vg2, prev_.vg, vg})) both = std::min(both, triple);
     }
-    // Needed only if the combined turn allows less than the caps the tool already obeys when
-    // it crosses these joints (e.g. a corner followed by a straight joint needs nothing more).
-    if (both < std::min(prev_.vg, vg)) {
+    if (both < kNoCap) {
       const double cap = std::max(a.length_mm, both);
       if (cap < vg) vg = cap;
       const std::size_t ps = buf_.slot(prev_.index_a);
@@ -66,7 +71,9 @@ void MovingAverageAccDec::on_joint(std::uint64_t index_a, const Segment& a, cons
   }
   const AxisVec before =
       prev_.valid && prev_.index_b == index_a ? prev_.end_dir : a.end_direction();
-  prev_ = {true, index_a, buf_.end_index() - 1, a.end_direction(), before, vg, a.length_mm < vg};
+  const double vg_before = prev_.valid && prev_.index_b == index_a ? prev_.vg : kNoCap;
+  prev_ = {true, index_a,   buf_.end_index() - 1, a.end_direction(), before,
+           vg,   vg_before, a.length_mm < vg};
   // Feed cap: where the programmed feed changes, the lower of the two feeds holds from the
   // range start until the tool has passed the joint (so the tool is never faster than the
   // feed of the block it is in).

@@ -86,6 +86,7 @@ class MovingAverageAccDec final : public AccDec {
     AxisVec end_dir;   // direction at the end of a
     AxisVec end_dir2;  // direction at the end of the segment before a
     double vg = 0;
+    double vg2 = 0;        // cap of the joint before that one
     bool short_a = false;  // a is shorter than the passing speed (one cycle can skip it)
   } prev_;
 };
