@@ -18,8 +18,7 @@ class InputError : public std::runtime_error {
   std::uint32_t col() const { return col_; }
   // "FILE:LINE:COL: error: MESSAGE"
   std::string formatted() const {
-    return file_ + ":" + std::to_string(line_) + ":" + std::to_string(col_) +
-           ": error: " + what();
+    return file_ + ":" + std::to_string(line_) + ":" + std::to_string(col_) + ": error: " + what();
   }
 
  private:
