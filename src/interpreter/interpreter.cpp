@@ -85,6 +85,14 @@ bool Interpreter::Impl::next(Block& out) {
   return true;
 }
 
+bool Interpreter::Impl::recover() {
+  out_.clear();
+  out_head_ = 0;
+  words_.clear();
+  if (at_eof_) finished_ = true;  // an error at the end (unclosed sub, loop, ...) ends it
+  return !finished_;
+}
+
 double Interpreter::Impl::offset(std::size_t axis) const {
   double off = params_.stored(work_param(modal_.coord_system, axis));
   if (params_.stored(kParamG92Applied) != 0)
@@ -112,6 +120,7 @@ bool Interpreter::Impl::read_live(int number, double& value) const {
 void Interpreter::Impl::step() {
   std::string_view raw;
   if (!reader_.next(raw)) {
+    at_eof_ = true;
     end_of_file();
     return;
   }
@@ -739,6 +748,10 @@ Interpreter::~Interpreter() = default;
 
 bool Interpreter::next(Block& out) {
   return impl_->next(out);
+}
+
+bool Interpreter::recover() {
+  return impl_->recover();
 }
 
 }  // namespace cncore::interp

@@ -35,6 +35,12 @@ class Interpreter {
   // file). Throws InputError (FILE:LINE:COL) on the first error in the program.
   bool next(Block& out);
 
+  // After next() threw InputError: drop what the failing line produced and continue with the
+  // following line, so that `cncore check` can report every error of a program. Returns false
+  // when nothing can follow (the error was found at the end of the program). Later errors may
+  // be consequences of the first (the failing line's modal changes may be half applied).
+  bool recover();
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

@@ -134,6 +134,7 @@ struct Interpreter::Impl final : LiveParameters {
   Impl(LineReader r, std::string name, const MachineConfig& m, const Options& options);
 
   bool next(Block& out);
+  bool recover();
 
   // interpreter.cpp
   void step();                                                 // read and execute one line
@@ -180,6 +181,7 @@ struct Interpreter::Impl final : LiveParameters {
   std::vector<Block> out_;  // blocks of the current line, handed out by next()
   std::size_t out_head_ = 0;
   bool finished_ = false;
+  bool at_eof_ = false;          // the reader has reached the end of the file
   bool started_ = false;         // some program line has been executed
   bool percent_framed_ = false;  // the program began with a "%" line
 

@@ -184,3 +184,52 @@ TEST(Streaming, HeapInUseDoesNotGrowWithProgramLength) {
 
 }  // namespace
 }  // namespace cncore::interp::test
+
+namespace cncore::interp::test {
+namespace {
+
+// `cncore check` reports every error: after an error the interpreter goes on with the next line.
+TEST(Recovery, EveryErrorOfAProgramIsReportedWithItsLine) {
+  const MachineConfig m = test_machine();
+  const std::string program =
+      "G21 G90 G1 F1000\n"  // 1
+      "X10 E5\n"            // 2: unknown word
+      "X20\n"               // 3: fine
+      "G0 G1 X30\n"         // 4: two words of one modal group
+      "X#<undefined>\n"     // 5: undefined parameter
+      "X40\n";              // 6: fine
+  Interpreter in(Interpreter::FromText{}, program, "r.ngc", m, Options{});
+  std::vector<std::uint32_t> error_lines;
+  std::vector<double> ends_x;
+  for (;;) {
+    try {
+      Block b;
+      if (!in.next(b)) break;
+      if (b.kind == BlockKind::kLine) ends_x.push_back(b.end[kX]);
+    } catch (const InputError& e) {
+      error_lines.push_back(e.line());
+      if (!in.recover()) break;
+    }
+  }
+  EXPECT_EQ(error_lines, (std::vector<std::uint32_t>{2, 4, 5}));
+  EXPECT_EQ(ends_x, (std::vector<double>{20, 40}));
+}
+
+TEST(Recovery, AnErrorAtTheEndOfTheProgramEndsIt) {
+  const MachineConfig m = test_machine();
+  Interpreter in(Interpreter::FromText{}, "o100 sub\nG0 X1\n", "e.ngc", m, Options{});
+  int errors = 0;
+  for (int guard = 0; guard < 10; ++guard) {
+    try {
+      Block b;
+      if (!in.next(b)) break;
+    } catch (const InputError&) {
+      ++errors;
+      if (!in.recover()) break;
+    }
+  }
+  EXPECT_EQ(errors, 1);
+}
+
+}  // namespace
+}  // namespace cncore::interp::test
