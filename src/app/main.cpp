@@ -1,12 +1,14 @@
-// The `cncore` command (spec 05): run, check, machine. CLI11 is included here only.
+// The `cncore` command (spec 05): run, check, table, machine. CLI11 is included here only.
 // Exit codes: 0 success, 1 the program or another input is wrong (FILE:LINE:COL: error: ...),
 // 2 wrong usage (including bad command-line values), 3 internal failure.
 #include <fmt/format.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cctype>
 #include <charconv>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -23,6 +25,7 @@
 #include "io/summary.hpp"
 #include "io/trajectory_csv.hpp"
 #include "simulation/run.hpp"
+#include "tables/table.hpp"
 
 namespace {
 
@@ -267,6 +270,168 @@ int command_check(const CheckArgs& a) {
   return 0;
 }
 
+struct TableArgs {
+  std::vector<std::string> tables;
+  std::string machine, trajectory, summary;
+  bool print_effective = false;
+  std::optional<double> spindle_rpm, master_speed_mm_min;
+  std::uint32_t repeat = 1;
+  std::vector<std::string> vars, params, signals, signals_at;
+};
+
+// "N=V" with an integer N >= 0 (an optional leading prefix such as '#' or 'P' is accepted).
+std::pair<int, double> numbered_value(const std::string& option, const std::string& arg,
+                                      char prefix) {
+  auto [name, value] = name_value(option, arg);
+  std::string_view n(name);
+  if (!n.empty() && std::toupper(static_cast<unsigned char>(n.front())) == prefix) {
+    n.remove_prefix(1);
+  }
+  int number = 0;
+  const auto [end, ec] = std::from_chars(n.data(), n.data() + n.size(), number);
+  if (n.empty() || ec != std::errc() || end != n.data() + n.size() || number < 0) {
+    throw UsageError(fmt::format("{}: '{}': the number must be an integer >= 0", option, arg));
+  }
+  return {number, value};
+}
+
+// Bad --signal / --signal-at text is a usage error (exit 2), not an input-file error.
+template <typename F>
+auto usage_on_input_error(const std::string& option, const std::string& arg, F&& f) {
+  try {
+    return f();
+  } catch (const InputError& e) {
+    throw UsageError(fmt::format("{}: '{}': {}", option, arg, e.what()));
+  }
+}
+
+std::string format_table_summary(const io::Summary& s, const tables::RunSummary& r,
+                                 const tables::TablePlan& plan, const MachineConfig& machine) {
+  static constexpr const char* kUnits[] = {"ms", "mm", "deg"};
+  const tables::Table& first = plan.tables.front();
+  std::string ref_name = "time";
+  if (first.ref_kind == tables::RefKind::kAxis) {
+    ref_name = fmt::format("axis {}", kAxisLetters[first.ref_axis]);
+  } else if (first.ref_kind == tables::RefKind::kSpindle) {
+    ref_name = "spindle";
+  }
+  const char* unit = kUnits[static_cast<int>(first.ref_kind)];
+  if (first.ref_kind == tables::RefKind::kAxis && machine.axes[first.ref_axis].rotary) {
+    unit = "deg";
+  }
+  std::string o;
+  for (const tables::Table& t : plan.tables) {
+    std::string axes;
+    for (std::size_t i = 0; i < kMaxAxes; ++i) {
+      if ((t.axis_mask >> i) & 1U) axes += kAxisLetters[i];
+    }
+    o += fmt::format("table         {} (axes {}, {} rows{}{})\n", t.file, axes, t.rows.size(),
+                     t.interp == tables::Interp::kCubic ? ", cubic" : ", linear",
+                     t.cyclic ? ", cyclic" : "");
+  }
+  o += fmt::format(
+      "machine       {} (period {} ms, SFTCAN {})\n", machine.name, machine.period_s * 1000,
+      plan.options.settings.cancel_mode == tables::CancelMode::kRebase ? "rebase" : "clear");
+  o += fmt::format("cycle time    {:.3f} s ({} cycles){}\n", s.cycle_time_s, s.cycles,
+                   r.finished ? "" : " — stopped before the end");
+  o += fmt::format("reference     {} {:.6g} … {:.6g} {}\n", ref_name, plan.start_ref, r.end_ref,
+                   unit);
+  if (plan.slow_factor > 1) {
+    o += fmt::format("slowed        reference runs {:.4g} times slower to fit the axis limits\n",
+                     plan.slow_factor);
+  }
+  std::string speeds, accels;
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    if (!machine.axes[i].enabled) continue;
+    speeds += fmt::format("{}{} {:.1f} (limit {:.0f})", speeds.empty() ? "" : ", ", kAxisLetters[i],
+                          s.max_axis_speed_mm_min[i], machine.axes[i].max_speed_mm_min);
+    accels += fmt::format("{}{} {:.1f} (limit {:.0f})", accels.empty() ? "" : ", ", kAxisLetters[i],
+                          s.max_axis_accel_mm_s2[i], machine.axes[i].max_accel_mm_s2);
+  }
+  o += fmt::format("axis speed    {} (mm/min or deg/min)\n", speeds);
+  o += fmt::format("axis accel    {} (mm/s² or deg/s²)\n", accels);
+  o += fmt::format("path length   {:.3f} mm (X Y Z)\n", s.path_length_mm);
+  for (const std::string& w : s.warnings) o += fmt::format("warning: {}\n", w);
+  for (const std::string& w : r.warnings) o += fmt::format("warning: {}\n", w);
+  return o;
+}
+
+int command_table(const TableArgs& a) {
+  const MachineConfig machine = machine_from(a.machine);
+  tables::RunOptions options;
+  options.settings.cancel_mode = machine.table_cancel_mode == TableCancelMode::kRebase
+                                     ? tables::CancelMode::kRebase
+                                     : tables::CancelMode::kClear;
+  options.settings.slow_to_fit = machine.table_slow_to_fit;
+  options.cyclic_repeats = a.repeat;
+  for (const std::string& p : a.params) {
+    const auto [n, v] = numbered_value("--param", p, 'P');
+    options.values.params[n] = v;
+  }
+  for (const std::string& p : a.vars) {
+    const auto [n, v] = numbered_value("--var", p, '#');
+    options.values.macros[n] = v;
+  }
+  for (const std::string& p : a.signals) {
+    const auto [n, v] =
+        usage_on_input_error("--signal", p, [&] { return tables::parse_signal(p, "--signal"); });
+    options.values.signals[n] = v;
+  }
+  for (const std::string& p : a.signals_at) {
+    options.values.signal_changes.push_back(usage_on_input_error(
+        "--signal-at", p, [&] { return tables::parse_signal_at(p, "--signal-at"); }));
+  }
+  if (a.spindle_rpm && !(*a.spindle_rpm > 0)) {
+    throw UsageError(fmt::format("--spindle-rpm: {} must be > 0", *a.spindle_rpm));
+  }
+  if (a.master_speed_mm_min && !(*a.master_speed_mm_min > 0)) {
+    throw UsageError(fmt::format("--master-speed: {} must be > 0", *a.master_speed_mm_min));
+  }
+
+  std::vector<tables::Table> tabs;
+  for (const std::string& path : a.tables) {
+    require_readable(path);
+    tabs.push_back(tables::load_table(path));
+  }
+  // 0 = not given: default_reference reports the REF line when a spindle or master speed is
+  // needed and missing.
+  options.reference = tables::default_reference(tabs.front(), machine, a.spindle_rpm.value_or(0),
+                                                a.master_speed_mm_min.value_or(0));
+  const tables::TablePlan plan = tables::plan_tables(std::move(tabs), machine, options);
+  if (a.print_effective) std::cout << tables::format_effective(plan) << std::flush;
+  for (const tables::Diagnostic& d : plan.diagnostics) std::cerr << d.formatted() << '\n';
+  if (plan.has_errors()) return 1;
+
+  // Outputs are temporaries until the run has finished (same as `run`).
+  std::optional<io::TrajectoryCsvWriter> csv;
+  if (!a.trajectory.empty()) {
+    io::TrajectoryColumns cols;
+    cols.ref = true;
+    csv.emplace(a.trajectory, machine, cols);
+  }
+  std::optional<io::AtomicOutputFile> json;
+  if (!a.summary.empty()) json.emplace(a.summary);
+
+  io::SummaryObserver summary(machine, "table");
+  ProgressObserver progress;
+  std::vector<sim::SampleObserver*> observers{&summary, &progress};
+  if (csv) observers.push_back(&*csv);
+  const tables::RunSummary result = tables::run_tables(plan, [&](const tables::TableSample& ts) {
+    motion::Sample m = tables::to_motion_sample(ts);
+    m.ref = ts.ref;
+    for (sim::SampleObserver* o : observers) o->on_sample(m);
+  });
+  for (sim::SampleObserver* o : observers) o->on_finish();
+
+  if (json) json->write(io::summary_to_json(summary.summary(), machine));
+  if (csv) csv->commit();
+  if (json) json->commit();
+  std::cout << format_table_summary(summary.summary(), result, plan, machine);
+  if (csv) std::cout << "trajectory    " << a.trajectory << "\n";
+  if (json) std::cout << "summary       " << a.summary << "\n";
+  return 0;
+}
+
 int main_cli(int argc, char** argv) {
   CLI::App app{
       "cncore: a CNC numerical-control kernel on a simulated machine.\n"
@@ -318,6 +483,44 @@ int main_cli(int argc, char** argv) {
       ->allow_extra_args(false)
       ->type_name("N=V");
 
+  TableArgs ta;
+  CLI::App* table = app.add_subcommand(
+      "table", "Run axis tables against a reference (time, master axis, spindle) with SFT/SFTCAN.");
+  table->add_option("TABLE", ta.tables, "Table files (one or more, same reference)")
+      ->required()
+      ->type_name("FILE.tbl");
+  table->add_option("--machine", ta.machine, "Machine configuration (TOML); default: built-in")
+      ->type_name("FILE.toml");
+  table->add_option("--trajectory", ta.trajectory, "Write one CSV row per interpolation cycle")
+      ->type_name("FILE.csv");
+  table->add_option("--summary", ta.summary, "Write the machine-readable summary (JSON)")
+      ->type_name("FILE.json");
+  table->add_flag("--print-effective", ta.print_effective,
+                  "Print the effective tables (shifts applied) before running");
+  table->add_option("--param", ta.params, "Parameter P<N> = VALUE for SFT=P<N> (repeatable)")
+      ->allow_extra_args(false)
+      ->type_name("N=V");
+  table->add_option("--var", ta.vars, "Macro variable #<N> = VALUE for SFT=#<N> (repeatable)")
+      ->allow_extra_args(false)
+      ->type_name("N=V");
+  table->add_option("--signal", ta.signals, "Signal R<N> = VALUE at the start (repeatable)")
+      ->allow_extra_args(false)
+      ->type_name("R<N>=V");
+  table
+      ->add_option("--signal-at", ta.signals_at,
+                   "Signal R<N> becomes VALUE at time T s while running (repeatable)")
+      ->allow_extra_args(false)
+      ->type_name("T:R<N>=V");
+  table->add_option("--spindle-rpm", ta.spindle_rpm, "Spindle speed for REF SPINDLE, rev/min")
+      ->type_name("RPM");
+  table
+      ->add_option("--master-speed", ta.master_speed_mm_min,
+                   "Master axis speed for REF AXIS, mm/min (deg/min for a rotary axis)")
+      ->type_name("MM_MIN");
+  table->add_option("--repeat", ta.repeat, "Repetitions of a CYCLIC table without a count")
+      ->check(CLI::Range(1U, 1000000000U))
+      ->type_name("N");
+
   std::string machine_path;
   CLI::App* machine = app.add_subcommand(
       "machine", "Print the machine configuration as TOML (built-in, or the effective one).");
@@ -333,6 +536,7 @@ int main_cli(int argc, char** argv) {
   }
   if (*run) return command_run(ra);
   if (*check) return command_check(ca);
+  if (*table) return command_table(ta);
   if (*machine) {
     std::cout << machine_config_to_toml(machine_from(machine_path));
     return 0;

@@ -184,6 +184,27 @@ void read_interpreter(const Reader& r, const toml::table& t, MachineConfig& c) {
   }
 }
 
+void read_tables(const Reader& r, const toml::table& t, MachineConfig& c) {
+  for (const auto& [key, node] : t) {
+    const std::string k(key.str());
+    const std::string name = "tables." + k;
+    if (k == "cancel_mode") {
+      const auto* s = node.as_string();
+      if (s != nullptr && s->get() == "clear") {
+        c.table_cancel_mode = TableCancelMode::kClear;
+      } else if (s != nullptr && s->get() == "rebase") {
+        c.table_cancel_mode = TableCancelMode::kRebase;
+      } else {
+        r.fail(key.source(), fmt::format("{} must be \"clear\" or \"rebase\"", name));
+      }
+    } else if (k == "slow_to_fit") {
+      c.table_slow_to_fit = r.boolean(key, node, name);
+    } else {
+      r.unknown(key, name);
+    }
+  }
+}
+
 void read_axis(const Reader& r, const toml::key& axis_key, const toml::table& t, std::size_t i,
                MachineConfig& c) {
   AxisConfig a = default_axis(i);
@@ -310,10 +331,12 @@ MachineConfig parse_machine_config(std::string_view toml_text, const std::string
       read_motion(r, r.table(key, node, k), c);
     } else if (k == "interpreter") {
       read_interpreter(r, r.table(key, node, k), c);
+    } else if (k == "tables") {
+      read_tables(r, r.table(key, node, k), c);
     } else if (k == "axes") {
       read_axes(r, key, r.table(key, node, k), c);
     } else {
-      r.unknown(key, k, " (sections are [motion], [axes.<x|y|z|a|b|c>], [interpreter])");
+      r.unknown(key, k, " (sections are [motion], [axes.<x|y|z|a|b|c>], [interpreter], [tables])");
     }
   }
   return c;
@@ -379,6 +402,13 @@ std::string machine_config_to_toml(const MachineConfig& c) {
        "runaway-loop guard for while/do/repeat (1 … 1e12)");
   line("max_call_depth = " + std::to_string(c.max_call_depth),
        "O-word subroutine call nesting (1 … 10000)");
+
+  o += "\n[tables]\n";
+  line(fmt::format("cancel_mode = \"{}\"",
+                   c.table_cancel_mode == TableCancelMode::kRebase ? "rebase" : "clear"),
+       "SFTCAN: \"clear\" = later rows use their written L values; \"rebase\" = gaps stay shifted");
+  line(fmt::format("slow_to_fit = {}", c.table_slow_to_fit),
+       "a table over an axis limit: false = refused; true = reference slowed to fit");
 
   o +=
       "\n# One table per axis; a table present enables the axis. When a file lists any axis, only\n"

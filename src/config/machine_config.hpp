@@ -22,6 +22,13 @@ struct AxisConfig {
   friend bool operator==(const AxisConfig&, const AxisConfig&) = default;
 };
 
+// [tables] cancel_mode (spec 02): what SFTCAN does with the accumulated reference shift. The
+// command maps it onto tables::CancelMode (the config library does not depend on the tables).
+enum class TableCancelMode : std::uint8_t {
+  kClear,   // "clear": the amount becomes 0, later rows use their written reference values
+  kRebase,  // "rebase": the running reference is reset by the amount, later gaps stay shifted
+};
+
 struct MachineConfig {
   std::string name = "built-in 3-axis mill";
 
@@ -46,6 +53,12 @@ struct MachineConfig {
   // [interpreter]
   std::uint64_t max_loop_iterations = 1000000;  // runaway-loop guard for while/do/repeat
   std::uint32_t max_call_depth = 64;            // O-word call nesting
+
+  // [tables] (table-format operation, spec 02)
+  TableCancelMode table_cancel_mode = TableCancelMode::kClear;
+  // A table that would exceed an axis limit: false → refused; true → the reference is slowed
+  // by one constant factor so that it fits.
+  bool table_slow_to_fit = false;
 
   friend bool operator==(const MachineConfig&, const MachineConfig&) = default;
 

@@ -61,6 +61,7 @@ std::string TrajectoryCsvWriter::header(const MachineConfig& machine,
   if (columns.correction) h += ",correction";
   if (columns.load) h += ",load";
   if (columns.load_target) h += ",load_target";
+  if (columns.ref) h += ",ref";
   return h;
 }
 
@@ -94,6 +95,7 @@ void TrajectoryCsvWriter::on_sample(const motion::Sample& s) {
   if (columns_.correction) put_optional(b, s.correction);
   if (columns_.load) put_optional(b, s.load_pct);
   if (columns_.load_target) put_optional(b, s.load_target_pct);
+  if (columns_.ref) put_optional(b, s.ref);
   b.push_back('\n');
   if (b.size() >= kFlushBytes) flush();
 }

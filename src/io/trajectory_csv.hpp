@@ -1,7 +1,8 @@
 // Trajectory CSV (spec 05): a header row, then one row per interpolation cycle from t = 0 to the
 // final stop. Required columns t, line, one per configured axis (x y z a b c, machine
-// coordinates), feed; optional override, correction, load, load_target when active. Streamed
-// through a fixed buffer into an AtomicOutputFile: memory does not grow with the run.
+// coordinates), feed; optional override, correction, load, load_target, ref (table runs) when
+// active. Streamed through a fixed buffer into an AtomicOutputFile: memory does not grow with the
+// run.
 #pragma once
 
 #include <fmt/format.h>
@@ -22,6 +23,7 @@ struct TrajectoryColumns {
   bool correction = false;    // `correction`, spec 03 coefficient
   bool load = false;          // `load`, % (spec 04)
   bool load_target = false;   // `load_target`, %
+  bool ref = false;           // `ref`, table reference value (spec 02: ms, mm or deg)
 };
 
 class TrajectoryCsvWriter : public sim::SampleObserver {

@@ -41,6 +41,7 @@ struct Sample {
   double correction = std::nan("");
   double load_pct = std::nan("");
   double load_target_pct = std::nan("");
+  double ref = std::nan("");  // table reference value (spec 02: ms, mm or deg); NaN otherwise
   // Auxiliary event (M/S/T) reached in this cycle, kind kAux; aux_letter == 0 when none.
   char aux_letter = 0;
   double aux_value = 0;

@@ -346,4 +346,199 @@ TEST_F(Cli, BundledExamplesRun) {
   }
 }
 
+// ---------------------------------------------------------------------------------------------
+// cncore table (spec 02 through the command line)
+
+// Time (s, from the `t` column) of the first row where `col` reaches `value` within 1e-6 from
+// below (or above, when `falling`); NaN when it never does.
+double time_reaching(const std::vector<std::map<std::string, double>>& rows, const char* col,
+                     double value, bool falling = false) {
+  for (const auto& row : rows) {
+    const double v = row.at(col);
+    if (falling ? v <= value + 1e-6 : v >= value - 1e-6) return row.at("t");
+  }
+  return std::nan("");
+}
+
+std::string tables_example(const std::string& name) {
+  return quote(std::string(CNCORE_SOURCE_DIR) + "/examples/tables/" + name);
+}
+
+const std::string kLathe = " --machine " + tables_example("lathe.toml");
+
+TEST_F(Cli, TableFig1ShiftKeepsTheGapsWithARefColumn) {
+  const Result r = run("table " + tables_example("fig1-shift.tbl") + kLathe +
+                       " --trajectory t.csv --summary s.json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(list_dir(dir_), (std::vector<std::string>{"s.json", "t.csv"}));
+  std::vector<std::string> header;
+  const auto rows = read_csv(dir_ / "t.csv", &header);
+  for (const char* col : {"t", "line", "x", "z", "feed", "ref"}) {
+    EXPECT_NE(std::find(header.begin(), header.end(), col), header.end()) << col;
+  }
+  ASSERT_GT(rows.size(), 3000u);
+  // Seed Fig. 1B: SFT-200 at the second row: 100, 200, 300, 400 at 1.0, 1.8, 2.8, 3.8 s.
+  EXPECT_NEAR(time_reaching(rows, "x", 100), 1.0, 1e-9);
+  EXPECT_NEAR(time_reaching(rows, "x", 200), 1.8, 1e-9);
+  EXPECT_NEAR(time_reaching(rows, "x", 300), 2.8, 1e-9);
+  EXPECT_NEAR(time_reaching(rows, "x", 400), 3.8, 1e-9);
+  EXPECT_NEAR(rows.back().at("t"), 3.8, 1e-9);
+  // REF TIME: the reference is the clock in ms.
+  for (const auto& row : rows) ASSERT_NEAR(row.at("ref"), row.at("t") * 1000, 1e-6);
+  // Between 1.0 and 1.8 s X covers 100 mm in 0.8 s: 7500 mm/min (X is the only moving axis).
+  const auto j = nlohmann::json::parse(slurp(dir_ / "s.json"));
+  EXPECT_NEAR(j.at("cycle_time_s").get<double>(), 3.8, 1e-9);
+  EXPECT_NEAR(j.at("max_feed_mm_min").get<double>(), 7500, 1e-3);
+  EXPECT_NE(r.out.find("cycle time    3.800 s"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("reference     time 0 … 3800 ms"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("X 7500.0"), std::string::npos) << r.out;
+}
+
+TEST_F(Cli, TablePrintEffectiveShowsTheShiftedReferences) {
+  const Result r = run("table " + tables_example("fig1-shift.tbl") + kLathe + " --print-effective");
+  ASSERT_EQ(r.code, 0) << r.err;
+  // Written L2000 L3000 L4000 become 1800 2800 3800; the first row keeps L1000.
+  for (const char* shifted : {"\nL1000 X100 ", "\nL1800 X200 ", "\nL2800 X300 ", "\nL3800 X400 "}) {
+    EXPECT_NE(r.out.find(shifted), std::string::npos) << shifted << "\n" << r.out;
+  }
+  EXPECT_EQ(r.out.find("\nL2000 X200 "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("written L2000, SFT, shift -200"), std::string::npos) << r.out;
+}
+
+TEST_F(Cli, TableFig2CancelModeFromTheMachineConfiguration) {
+  const Result clear =
+      run("table " + tables_example("fig2c-cancel.tbl") + kLathe + " --trajectory clear.csv");
+  ASSERT_EQ(clear.code, 0) << clear.err;
+  const auto c = read_csv(dir_ / "clear.csv");
+  EXPECT_NEAR(time_reaching(c, "x", 200), 1.5, 1e-9);
+  EXPECT_NEAR(time_reaching(c, "x", 300), 3.0, 1e-9);
+  EXPECT_NEAR(time_reaching(c, "x", 400), 4.0, 1e-9);
+
+  write(dir_ / "rebase.toml",
+        "[tables]\ncancel_mode = \"rebase\"\n[axes.x]\nmin_mm = -50\nmax_mm = 450\n");
+  const Result rebase = run("table " + tables_example("fig2c-cancel.tbl") +
+                            " --machine rebase.toml --trajectory rebase.csv --print-effective");
+  ASSERT_EQ(rebase.code, 0) << rebase.err;
+  EXPECT_NE(rebase.out.find("SFTCAN rebase"), std::string::npos) << rebase.out;
+  const auto b = read_csv(dir_ / "rebase.csv");
+  EXPECT_NEAR(time_reaching(b, "x", 200), 1.5, 1e-9);
+  EXPECT_NEAR(time_reaching(b, "x", 300), 2.5, 1e-9);
+  EXPECT_NEAR(time_reaching(b, "x", 400), 3.5, 1e-9);
+
+  write(dir_ / "bad.toml", "[tables]\ncancel_mode = \"keep\"\n");
+  const Result bad = run("table " + tables_example("fig2c-cancel.tbl") + " --machine bad.toml");
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_EQ(bad.err.rfind("bad.toml:2:1: error:", 0), 0u) << bad.err;
+  EXPECT_NE(bad.err.find("tables.cancel_mode"), std::string::npos) << bad.err;
+}
+
+TEST_F(Cli, TableFig6MacroVariablesOverlapTheCornerAndEndEarlier) {
+  const std::string both = tables_example("fig6-x.tbl") + " " + tables_example("fig6-z.tbl");
+  const Result plain =
+      run("table " + both + kLathe + " --var 501=0 --var 502=0 --var 503=0 --trajectory p.csv");
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  const Result shifted = run("table " + both + kLathe +
+                             " --var 501=-200 --var '#502=-400' --var 503=-200 --trajectory s.csv");
+  ASSERT_EQ(shifted.code, 0) << shifted.err;
+  const auto p = read_csv(dir_ / "p.csv");
+  const auto s = read_csv(dir_ / "s.csv");
+  ASSERT_FALSE(p.empty());
+  ASSERT_FALSE(s.empty());
+  // Unshifted (Fig. 5): Z 1.0 … 2.0 s, X 2.0 … 3.0 s, cycle 4.0 s. Shifted: Z 0.8 … 1.8 s,
+  // X 1.6 … 2.6 s, cycle 3.6 s: 400 ms earlier.
+  EXPECT_NEAR(p.back().at("t"), 4.0, 1e-9);
+  EXPECT_NEAR(s.back().at("t"), 3.6, 1e-9);
+  EXPECT_NEAR(time_reaching(p, "z", -100, true), 2.0, 1e-9);
+  EXPECT_NEAR(time_reaching(s, "z", -100, true), 1.8, 1e-9);
+  EXPECT_NEAR(time_reaching(s, "x", 100), 2.6, 1e-9);
+  // The corner overlaps: at 1.7 s both axes move (Z = −100·0.9 = −90, X = 100·0.1 = 10).
+  bool seen = false;
+  for (const auto& row : s) {
+    if (std::fabs(row.at("t") - 1.7) > 1e-9) continue;
+    seen = true;
+    EXPECT_NEAR(row.at("z"), -90, 1e-6);
+    EXPECT_NEAR(row.at("x"), 10, 1e-6);
+  }
+  EXPECT_TRUE(seen);
+  // Without the variables the X table is wrong at its SFT=#502 (line 7, column of SFT).
+  const Result missing = run("table " + both + kLathe + " --trajectory m.csv");
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_NE(missing.err.find("fig6-x.tbl:7:15: error:"), std::string::npos) << missing.err;
+  EXPECT_NE(missing.err.find("#502"), std::string::npos) << missing.err;
+  EXPECT_FALSE(fs::exists(dir_ / "m.csv"));
+}
+
+TEST_F(Cli, TableParameterAndSignalAmounts) {
+  write(dir_ / "p.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=P5\nL3000 X300\n");
+  const Result p = run("table p.tbl --param 5=-300 --trajectory p.csv");
+  ASSERT_EQ(p.code, 0) << p.err;
+  const auto pr = read_csv(dir_ / "p.csv");
+  EXPECT_NEAR(time_reaching(pr, "x", 200), 1.7, 1e-9);
+  EXPECT_NEAR(time_reaching(pr, "x", 300), 2.7, 1e-9);
+
+  write(dir_ / "r.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=R1001\nL3000 X300\n");
+  const Result r = run("table r.tbl --signal R1001=-200 --trajectory r.csv");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NEAR(time_reaching(read_csv(dir_ / "r.csv"), "x", 200), 1.8, 1e-9);
+  // The signal changes at 0.5 s, before the row is read at 1.0 s: the new value applies.
+  const Result at =
+      run("table r.tbl --signal R1001=-200 --signal-at 0.5:R1001=-400 --trajectory at.csv");
+  ASSERT_EQ(at.code, 0) << at.err;
+  EXPECT_NEAR(time_reaching(read_csv(dir_ / "at.csv"), "x", 200), 1.6, 1e-9);
+
+  const Result undefined = run("table r.tbl --trajectory u.csv");
+  EXPECT_EQ(undefined.code, 1);
+  EXPECT_EQ(undefined.err.rfind("r.tbl:4:", 0), 0u) << undefined.err;
+  EXPECT_FALSE(fs::exists(dir_ / "u.csv"));
+  const Result usage = run("table r.tbl --signal R1001=x");
+  EXPECT_EQ(usage.code, 2);
+  EXPECT_NE(usage.err.find("--signal"), std::string::npos) << usage.err;
+}
+
+TEST_F(Cli, BadTableIsExitOneWithFileLineColumnAndNoOutput) {
+  // The shift takes the second point back before the first: 2000 − 1500 = 500 < 1000.
+  write(dir_ / "back.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT-1500\n");
+  const Result back = run("table back.tbl --trajectory t.csv --summary s.json");
+  EXPECT_EQ(back.code, 1);
+  EXPECT_EQ(back.err.rfind("back.tbl:4:1: error:", 0), 0u) << back.err;
+  EXPECT_EQ(back.out, "");
+  write(dir_ / "addr.tbl", "REF TIME\nAXES X\nL1000 X100 Q5\n");
+  const Result addr = run("table addr.tbl --trajectory t.csv --summary s.json");
+  EXPECT_EQ(addr.code, 1);
+  EXPECT_EQ(addr.err.rfind("addr.tbl:3:12: error:", 0), 0u) << addr.err;
+  // Nothing written, no temporaries left behind.
+  EXPECT_EQ(list_dir(dir_), (std::vector<std::string>{"addr.tbl", "back.tbl"}));
+  // An axis the machine does not have (the built-in mill has no B).
+  write(dir_ / "b.tbl", "REF TIME\nAXES B\nL1000 B10\n");
+  const Result axis = run("table b.tbl --trajectory t.csv");
+  EXPECT_EQ(axis.code, 1);
+  EXPECT_EQ(axis.err.rfind("b.tbl:", 0), 0u) << axis.err;
+  EXPECT_FALSE(fs::exists(dir_ / "t.csv"));
+}
+
+TEST_F(Cli, TableSpindleReferenceNeedsTheSpeed) {
+  const Result missing = run("table " + tables_example("spindle-cam.tbl") + kLathe);
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_NE(missing.err.find("spindle-cam.tbl:3:1: error:"), std::string::npos) << missing.err;
+  // 60 rpm = 360 deg/s; CYCLIC 3: three revolutions, 3 s, the reference ends at 1080 deg.
+  const Result r = run("table " + tables_example("spindle-cam.tbl") + kLathe +
+                       " --spindle-rpm 60 --trajectory t.csv");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = read_csv(dir_ / "t.csv");
+  ASSERT_FALSE(rows.empty());
+  EXPECT_NEAR(rows.back().at("t"), 3.0, 1e-9);
+  EXPECT_NEAR(rows.back().at("ref"), 1080, 1e-6);
+  // L180 X10 of each revolution: X = 10 at 0.5, 1.5, 2.5 s.
+  for (const double t : {0.5, 1.5, 2.5}) {
+    bool seen = false;
+    for (const auto& row : rows) {
+      if (std::fabs(row.at("t") - t) > 1e-9) continue;
+      seen = true;
+      EXPECT_NEAR(row.at("x"), 10, 1e-6) << "t = " << t;
+      EXPECT_NEAR(row.at("ref"), t * 360, 1e-6);
+    }
+    EXPECT_TRUE(seen) << t;
+  }
+}
+
 }  // namespace

@@ -61,6 +61,8 @@ TEST(MachineConfig, PrintedCustomParsesBackEqual) {
   c.bound_resultant_accel = true;
   c.max_loop_iterations = 123456789012;
   c.max_call_depth = 9;
+  c.table_cancel_mode = TableCancelMode::kRebase;
+  c.table_slow_to_fit = true;
   c.axes[kZ].enabled = false;
   c.axes[kZ] = AxisConfig{};  // a disabled axis keeps no values
   c.axes[kA] = AxisConfig{true, true, -120, 30, 3600, 720};
@@ -86,7 +88,7 @@ TEST(MachineConfig, EveryPrintedKeyHasAComment) {
     }
     pos = end + 1;
   }
-  EXPECT_GE(keys, 28);  // name + 10 motion + 2 interpreter + 3 axes × 5
+  EXPECT_GE(keys, 30);  // name + 10 motion + 2 interpreter + 2 tables + 3 axes × 5
   EXPECT_NE(text.find("T = Vmax / Amax"), std::string::npos);
 }
 
@@ -108,6 +110,9 @@ max_accel_deg_s2 = 100
 start_deg = 45
 [interpreter]
 max_loop_iterations = 5000
+[tables]
+cancel_mode = "rebase"
+slow_to_fit = true
 )",
                                                "router.toml");
   EXPECT_EQ(c.name, "small router");
@@ -127,6 +132,17 @@ max_loop_iterations = 5000
   EXPECT_TRUE(c.axes[kB].rotary);
   EXPECT_DOUBLE_EQ(c.axes[kB].max_accel_mm_s2, 100);
   EXPECT_DOUBLE_EQ(c.start_position[kB], 45);
+  EXPECT_EQ(c.table_cancel_mode, TableCancelMode::kRebase);
+  EXPECT_TRUE(c.table_slow_to_fit);
+}
+
+TEST(MachineConfig, TablesDefaultsAreClearAndRefuse) {
+  const MachineConfig c = parse_machine_config("[tables]\n", "t.toml");
+  EXPECT_EQ(c.table_cancel_mode, TableCancelMode::kClear);
+  EXPECT_FALSE(c.table_slow_to_fit);
+  const std::string text = machine_config_to_toml(c);
+  EXPECT_NE(text.find("cancel_mode = \"clear\""), std::string::npos) << text;
+  EXPECT_NE(text.find("slow_to_fit = false"), std::string::npos) << text;
 }
 
 struct BadCase {
@@ -179,6 +195,11 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"[interpreter]\nmax_loop_iterations = 0\n", 2, 1,
                 "interpreter.max_loop_iterations"},
         BadCase{"[interpreter]\nmax_call_depth = -3\n", 2, 1, "interpreter.max_call_depth"},
+        BadCase{"[tables]\ncancel_mode = \"keep\"\n", 2, 1, "tables.cancel_mode"},
+        BadCase{"[tables]\ncancel_mode = 1\n", 2, 1, "tables.cancel_mode"},
+        BadCase{"[tables]\nslow_to_fit = \"yes\"\n", 2, 1, "tables.slow_to_fit"},
+        BadCase{"[tables]\nrepeat = 2\n", 2, 1, "tables.repeat"},
+        BadCase{"tables = 3\n", 1, 1, "tables must be a table"},
         BadCase{"motion = 3\n", 1, 1, "motion must be a table"},
         BadCase{"[axes]\n", 1, 2, "at least one axis"},
         BadCase{"[axes.x]\nmin_mm = 0\n[axes.x.foo]\n", 3, 9, "axes.x.foo"},

@@ -143,6 +143,39 @@ TEST(TrajectoryCsv, OptionalColumnsAndConfiguredAxes) {
   EXPECT_EQ(rows[0].count("correction"), 0u);
 }
 
+TEST(TrajectoryCsv, RefColumnOnlyForTableRuns) {
+  const auto dir = fresh_dir();
+  const MachineConfig m = default_machine_config();
+  TrajectoryColumns cols;
+  cols.ref = true;
+  {
+    TrajectoryCsvWriter w((dir / "table.csv").string(), m, cols);
+    motion::Sample s = sample(0.25, 7, 10, 0, 0, 600);
+    s.ref = 1800.5;  // ms
+    w.on_sample(s);
+    w.on_sample(sample(0.5, 7, 20, 0, 0, 600));  // no reference: empty cell
+    w.commit();
+  }
+  std::vector<std::string> header;
+  const auto rows = read_csv(slurp(dir / "table.csv"), &header);
+  ASSERT_FALSE(header.empty());
+  EXPECT_EQ(header.back(), "ref");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].at("ref"), "1800.500000");
+  EXPECT_EQ(rows[1].at("ref"), "");
+  // A part-program run (ref off) has no such column even when the sample carries a value.
+  {
+    TrajectoryCsvWriter w((dir / "program.csv").string(), m, TrajectoryColumns{});
+    motion::Sample s = sample(0, 1, 0, 0, 0, 0);
+    s.ref = 5;
+    w.on_sample(s);
+    w.commit();
+  }
+  const auto prog = read_csv(slurp(dir / "program.csv"), &header);
+  ASSERT_EQ(prog.size(), 1u);
+  EXPECT_EQ(prog[0].count("ref"), 0u);
+}
+
 TEST(TrajectoryCsv, LongRunStreamsAndIsComplete) {
   const auto dir = fresh_dir();
   const auto path = dir / "traj.csv";
