@@ -541,4 +541,28 @@ TEST_F(Cli, TableSpindleReferenceNeedsTheSpeed) {
   }
 }
 
+TEST_F(Cli, TableMasterAxisAndSignalChangeDuringTheRun) {
+  // X follows Z: Z moves from its start 0 at 600 mm/min = 10 mm/s, so Z = 50 (X = 10) at 5 s.
+  write(dir_ / "ax.tbl", "REF AXIS Z\nAXES X\nL50 X10\nL100 X20\n");
+  const Result r = run("table ax.tbl" + kLathe + " --master-speed 600 --trajectory ax.csv");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = read_csv(dir_ / "ax.csv");
+  EXPECT_NEAR(time_reaching(rows, "x", 10), 5.0, 1e-9);
+  EXPECT_NEAR(time_reaching(rows, "z", 50), 5.0, 1e-9);
+  EXPECT_NEAR(rows.back().at("t"), 10.0, 1e-9);
+  for (const auto& row : rows) ASSERT_NEAR(row.at("ref"), row.at("z"), 1e-6);
+  const Result no_speed = run("table ax.tbl" + kLathe);
+  EXPECT_EQ(no_speed.code, 1);
+  EXPECT_EQ(no_speed.err.rfind("ax.tbl:1:", 0), 0u) << no_speed.err;
+
+  // R1 changes to −1500 at 0.5 s; the row L2000 SFT=R1 is read later and goes back to 500 ms:
+  // the error comes during the run, and still no output is left.
+  write(dir_ / "late.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=R1\nL3000 X300\n");
+  const Result late = run(
+      "table late.tbl --signal R1=0 --signal-at 0.5:R1=-1500 --trajectory t.csv --summary s.json");
+  EXPECT_EQ(late.code, 1);
+  EXPECT_NE(late.err.find("late.tbl:4:1: error:"), std::string::npos) << late.err;
+  EXPECT_EQ(list_dir(dir_), (std::vector<std::string>{"ax.csv", "ax.tbl", "late.tbl"}));
+}
+
 }  // namespace
