@@ -565,4 +565,25 @@ TEST_F(Cli, TableMasterAxisAndSignalChangeDuringTheRun) {
   EXPECT_EQ(list_dir(dir_), (std::vector<std::string>{"ax.csv", "ax.tbl", "late.tbl"}));
 }
 
+TEST_F(Cli, TableOverTheAxisSpeedIsRefusedOrSlowedToFit) {
+  // 100 mm in 100 ms = 60 000 mm/min; the built-in X allows 15 000 mm/min (4 times less).
+  write(dir_ / "fast.tbl", "REF TIME\nAXES X\nL100 X100\n");
+  const Result refused = run("table fast.tbl --trajectory t.csv");
+  EXPECT_EQ(refused.code, 1);
+  EXPECT_NE(refused.err.find("fast.tbl:3:1: error: X speed 60000 mm/min"), std::string::npos)
+      << refused.err;
+  EXPECT_FALSE(fs::exists(dir_ / "t.csv"));
+
+  write(dir_ / "slow.toml", "[tables]\nslow_to_fit = true\n");
+  const Result slowed =
+      run("table fast.tbl --machine slow.toml --trajectory t.csv --summary s.json");
+  ASSERT_EQ(slowed.code, 0) << slowed.err;
+  EXPECT_NE(slowed.out.find("slowed        reference runs 4 times slower"), std::string::npos)
+      << slowed.out;
+  const auto rows = read_csv(dir_ / "t.csv");
+  EXPECT_NEAR(time_reaching(rows, "x", 100), 0.4, 1e-9);  // 100 ms of reference × 4
+  const auto j = nlohmann::json::parse(slurp(dir_ / "s.json"));
+  EXPECT_NEAR(j.at("max_axis_speed_mm_min").at("x").get<double>(), 15000, 1e-3);
+}
+
 }  // namespace
