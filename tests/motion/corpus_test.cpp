@@ -1,0 +1,267 @@
+// The shared third-party corpus (CNCORE_SHARED_DIR/testdata/gcode) through the whole simulated
+// machine: every program that `cncore check` accepts on the built-in machine runs through
+// sim::run_program (the driver of `cncore run`) in look-ahead and in stop mode, and the in-memory
+// samples go to the independent checker (tests/support), which must find no violation of spec 01
+// P1–P4 (path ≤ 1 µm, speeds, joint speeds, accelerations, end point ≤ 1e-9 mm at rest).
+// One ctest test per program × mode. Programs absent from the folder are skipped.
+#include <gtest/gtest.h>
+
+#include <cctype>
+#include <cstdio>
+#include <filesystem>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "config/machine_config.hpp"
+#include "core/error.hpp"
+#include "limits.hpp"
+#include "program_blocks.hpp"
+#include "simulation/run.hpp"
+#include "trajectory.hpp"
+#include "trajectory_checker.hpp"
+
+namespace cncore::motion::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path corpus_dir() {
+  return fs::path(CNCORE_SHARED_DIR) / "testdata" / "gcode";
+}
+
+// A violation measured on a corpus program and reported (issue 3). The case still runs: every
+// other property must hold, the listed properties may not exceed max_value_mm_s, and the case is
+// then skipped with the text; when the violation is no longer measured the case fails so that
+// the entry is removed.
+struct KnownViolation {
+  const char* text = nullptr;  // nullptr: none
+  testing::Property property = testing::Property::kJointSpeed;
+  testing::Property property2 = testing::Property::kJointSpeed;  // a second one, same bound
+  double max_value_mm_s = 0;
+};
+
+struct CorpusProgram {
+  const char* file;
+  // Stop mode stops at every block end; the two programs of ~6 M cycles (20–26 s each in stop
+  // mode on this machine) run in look-ahead mode only, to keep the corpus run small.
+  bool stop_mode = true;
+  KnownViolation lookahead{};
+  KnownViolation stop{};
+};
+
+using P = testing::Property;
+// Measured 25 Nov 2026 (see the report to issue 3): at a 180° reversal (a block that goes
+// straight back along the previous one) the checker finds the cycle that passes the joint at
+// 2·Vg. On camotics/wave.gcode (CSV, look-ahead) the tool moves 1 µm per cycle through the
+// reversal, z 2.9995 → 3 → 2.9995 → 2.9985: the sample on the fold lies on both segments, so the
+// projection may keep it on the first one and charge the next cycle 2 µm. Likely the checker's
+// projection, not the kernel; the checker owner decides.
+constexpr KnownViolation kReversal{
+    "P2 joint speed at 180-degree reversals: 2.0 mm/s > Vg 1.0 mm/s (Amax*tau/(2 sin 90deg))",
+    P::kJointSpeed, P::kJointSpeed, 2.0 * 1.0001};
+
+// The programs of the corpus that `cncore check` accepts on the built-in machine (the others are
+// rejected with an error naming the unsupported feature; see tests/interpreter/test_corpus.cpp
+// and the test CorpusList below).
+const CorpusProgram kPrograms[] = {
+    {"camotics/bear.nc"},
+    {"camotics/botomata_bottom.nc",
+     false,
+     {"P2 joint speed at 180-degree reversals, lines 4603 4680 4757 4834 5649 ... (8): 1.99999999 "
+      "mm/s > Vg 1 mm/s",
+      P::kJointSpeed, P::kJointSpeed, 2.0 * 1.0001}},
+    {"camotics/compass.ngc"},
+    {"camotics/genes-encoder.ngc",
+     false,
+     {"P2 speed and joint speed, line 27 (G1 Z plunge at F = 0.776 mm/s after G0 Z up, a "
+      "180-degree reversal), 10 times (t = 3211.081 s ...): 1.55217095 mm/s > 0.776111111 mm/s "
+      "(speed) and > Vg 1 mm/s (joint)",
+      P::kSpeed, P::kJointSpeed, 1.5522 * 1.0001}},
+    {"camotics/heart.ngc"},
+    {"camotics/locket_outside.ngc",
+     true,
+     {"P2 joint speed at 180-degree reversals, lines 9256 and 9259: 1.99999999 mm/s > Vg 1 mm/s",
+      P::kJointSpeed, P::kJointSpeed, 2.0 * 1.0001}},
+    {"camotics/slant_test.nc",
+     true,
+     {},
+     // Stop mode: the sample that lands on the end of line 7 (G0 Z0, arriving at 0.5 mm/s, then
+     // at rest) is tagged line 8 by the kernel and charged to line 8's F5 = 0.0833 mm/s.
+     {"stop mode, P2 speed line 8 at t = 208.426 s: 0.5 mm/s > 0.0833333333 mm/s (F5 of line 8; "
+      "the cycle is the last one of the G0 Z0 of line 7, arriving at its end)",
+      P::kSpeed, P::kSpeed, 0.5 * 1.0001}},
+    {"camotics/tiny_cat_outline.ngc"},
+    {"camotics/vcarve.ngc"},
+    {"camotics/wave.gcode",
+     true,
+     {"P2 joint speed at the 180-degree reversal before line 7 (t = 0.299 s): 2 mm/s > Vg 1 mm/s",
+      P::kJointSpeed, P::kJointSpeed, 2.0 * 1.0001}},
+    {"cncjs/arc-xz-plane.gcode"},
+    {"cncjs/arc-yz-plane.gcode"},
+    {"cncjs/circle-inch.gcode"},
+    {"grbl/HelloWorld_cambam.nc"},
+    {"grbl/SO2_helloworld.nc"},
+    {"grbl/braid_cut2d.nc"},
+    {"grbl/braid_test.gcode"},
+    {"linuxcnc-tp/arc_time.ngc"},
+    {"linuxcnc-tp/circle_small_segments_ncd.ngc"},
+    {"linuxcnc-tp/line-contouring-xz.ngc"},
+    {"linuxcnc-tp/short_segments_0.001.ngc"},
+    {"linuxcnc-tp/tight-corner-tolerance.ngc",
+     true,
+     {"P2 joint speed at 111 reversals (179.9+ degrees), lines 4, 6, 8, ... (t = 0.279 s ...): "
+      "2 mm/s > Vg 1 mm/s",
+      P::kJointSpeed, P::kJointSpeed, 2.0 * 1.0001}},
+    {"linuxcnc-tp/zigzag_0.002_0.0005.ngc"},
+    {"linuxcnc/3dtest.ngc",
+     true,
+     {"P2 joint speed at 180-degree reversals, lines 11 13 19 28 30 ... (6): 2 mm/s > Vg 1 mm/s",
+      P::kJointSpeed, P::kJointSpeed, 2.0 * 1.0001}},
+    {"linuxcnc/arcspiral.ngc"},
+    {"linuxcnc/factorial.ngc"},
+    {"linuxcnc/flowsnake.ngc"},
+    {"ugs/ShapeOko_Calibration_Pattern_01b.ngc"},
+    {"ugs/arc_rword_test.gcode"},
+    {"ugs/enclosure.nc"},
+    {"ugs/g17-g18-g19.gcode"},
+    {"ugs/spiral.gcode"},
+    {"ugs/stress_test.gcode",
+     true,
+     {"P2 joint speed at 30 180-degree reversals, lines 204 604 1004 1404 1804 ...: 2 mm/s > Vg 1 "
+      "mm/s",
+      P::kJointSpeed, P::kJointSpeed, 2.0 * 1.0001}},
+};
+
+struct Case {
+  CorpusProgram program;
+  Mode mode = Mode::kLookahead;
+};
+
+// Readable test names in ctest ("file mode" instead of the bytes of the parameter).
+void PrintTo(const Case& c, std::ostream* os) {
+  *os << c.program.file << (c.mode == Mode::kLookahead ? " lookahead" : " stop");
+}
+
+std::vector<Case> all_cases() {
+  std::vector<Case> out;
+  for (const auto& p : kPrograms) {
+    out.push_back({p, Mode::kLookahead});
+    if (p.stop_mode) out.push_back({p, Mode::kStop});
+  }
+  return out;
+}
+
+// Appends every sample to a Trajectory (exact in-memory positions: the checker's strict 1e-9 mm
+// end-point tolerance applies) — no CSV.
+struct TrajectoryRecorder : sim::SampleObserver {
+  testing::Trajectory traj;
+  void on_sample(const Sample& s) override { traj.add_sample(s); }
+};
+
+// Every stored violation with full precision, and for joint violations the joint's turn angle
+// and passing speed (what the report to the kernel owner needs).
+std::string details(const testing::CheckReport& rep) {
+  std::string out;
+  char buf[256];
+  for (const auto& v : rep.violations) {
+    std::snprintf(buf, sizeof buf, "  %s: line %u, t %.3f s (sample %zu): %.9g > %.9g (x%.4f)\n",
+                  testing::property_name(v.property), v.line, v.t_s, v.index, v.value, v.limit,
+                  v.limit > 0 ? v.value / v.limit : 0.0);
+    out += buf;
+  }
+  for (const auto& j : rep.joints) {
+    if (j.speed_mm_s <= j.vg_mm_s * 1.005) continue;
+    std::snprintf(buf, sizeof buf,
+                  "  joint before line %u: turn %.6f deg, Vg %.9g mm/s, measured %.9g mm/s%s\n",
+                  j.line, j.angle_deg, j.vg_mm_s, j.speed_mm_s, j.stop ? " (stop)" : "");
+    out += buf;
+  }
+  return out;
+}
+
+class CorpusRun : public ::testing::TestWithParam<Case> {};
+
+TEST_P(CorpusRun, KeepsP1ToP4) {
+  const Case& c = GetParam();
+  const fs::path path = corpus_dir() / c.program.file;
+  if (!fs::exists(path)) GTEST_SKIP() << "shared corpus not found: " << path;
+  const KnownViolation& known = c.mode == Mode::kLookahead ? c.program.lookahead : c.program.stop;
+  const MachineConfig machine = default_machine_config();
+  sim::RunOptions options;
+  options.kernel.mode = c.mode;
+  options.kernel.bound_resultant_accel = machine.bound_resultant_accel;  // as `cncore run`
+  TrajectoryRecorder rec;
+  rec.traj.period_s = machine.period_s;
+  sim::RunCounts counts;
+  try {
+    counts = sim::run_program(path.string(), machine, options, {&rec});
+  } catch (const InputError& e) {
+    FAIL() << "run failed: " << e.formatted();
+  }
+  ASSERT_EQ(counts.cycles, rec.traj.size());
+  ASSERT_GE(rec.traj.size(), 1u);
+
+  const std::vector<Block> blocks = testing::read_blocks(path.string(), machine);
+  const testing::CheckReport rep =
+      testing::check_trajectory(rec.traj, blocks, testing::limits_from_config(machine));
+  if (known.text == nullptr) {
+    EXPECT_TRUE(rep.ok()) << rep.summary() << details(rep);
+  } else {
+    for (const auto& v : rep.violations) {
+      const bool listed = v.property == known.property || v.property == known.property2;
+      EXPECT_TRUE(listed && v.value <= known.max_value_mm_s)
+          << "beyond the known violation: " << v.to_string() << "\n"
+          << rep.summary() << details(rep);
+    }
+    EXPECT_FALSE(rep.ok()) << "the known violation (" << known.text
+                           << ") is no longer measured: remove it from kPrograms";
+  }
+  EXPECT_EQ(rep.samples, rec.traj.size());
+  // The run reached the end of the program (P4 is in rep; this names the figure on failure).
+  EXPECT_LE(rep.end_error_mm, 1e-9) << rep.summary();
+  RecordProperty("cycle_time_s", std::to_string(rec.traj.t_s.back()));
+  RecordProperty("blocks", std::to_string(counts.blocks));
+  std::printf("%s %s: %llu blocks, %zu samples, cycle time %.3f s\n", c.program.file,
+              c.mode == Mode::kLookahead ? "lookahead" : "stop",
+              static_cast<unsigned long long>(counts.blocks), rec.traj.size(), rec.traj.t_s.back());
+  if (known.text != nullptr && !HasFailure()) {
+    GTEST_SKIP() << "known violation: " << known.text << " (see issue 3)\n" << details(rep);
+  }
+}
+
+std::string case_name(const ::testing::TestParamInfo<Case>& info) {
+  std::string n = info.param.program.file;
+  for (char& ch : n) {
+    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+  }
+  return n + (info.param.mode == Mode::kLookahead ? "_Lookahead" : "_Stop");
+}
+
+INSTANTIATE_TEST_SUITE_P(Corpus, CorpusRun, ::testing::ValuesIn(all_cases()), case_name);
+
+// Every program of the folder is either in the list above or rejected by the interpreter on the
+// built-in machine (what `cncore check` does), so a newly accepted program needs a decision.
+TEST(CorpusList, EveryAcceptedProgramIsRun) {
+  if (!fs::exists(corpus_dir())) GTEST_SKIP() << "shared corpus not found: " << corpus_dir();
+  const MachineConfig machine = default_machine_config();
+  for (const auto& e : fs::recursive_directory_iterator(corpus_dir())) {
+    const std::string ext = e.path().extension().string();
+    if (ext != ".ngc" && ext != ".nc" && ext != ".gcode") continue;
+    const std::string rel = fs::relative(e.path(), corpus_dir()).string();
+    bool listed = false;
+    for (const auto& p : kPrograms) listed = listed || rel == p.file;
+    bool accepted = true;
+    try {
+      (void)testing::read_blocks(e.path().string(), machine);
+    } catch (const InputError&) {
+      accepted = false;
+    }
+    EXPECT_EQ(listed, accepted) << rel
+                                << (accepted ? " is accepted but not run here"
+                                             : " is listed but rejected by the check");
+  }
+}
+
+}  // namespace
+}  // namespace cncore::motion::test
