@@ -335,11 +335,11 @@ void Interpreter::Impl::execute_words() {
     emit_aux('M', 6, true);
   }
   // 9 spindle
-  if (const auto* m = w.mgroup(MGroup::kSpindle)) emit_aux('M', m->code10 / 10, true);
+  if (const auto* m = w.mgroup(MGroup::kSpindle)) emit_aux('M', m->code10 / 10.0, true);
   // 11 coolant (M7 and M8 may both be present)
   for (int i = 0; i < w.m_count; ++i) {
     const auto& m = w.m[static_cast<std::size_t>(i)];
-    if (m.code10 == 70 || m.code10 == 80 || m.code10 == 90) emit_aux('M', m.code10 / 10, false);
+    if (m.code10 == 70 || m.code10 == 80 || m.code10 == 90) emit_aux('M', m.code10 / 10.0, false);
   }
   // 14 dwell
   const Words::Code* nonmodal = w.group(GGroup::kNonModal);
@@ -468,11 +468,11 @@ void Interpreter::Impl::execute_words() {
     switch (m->code10) {
       case 0:
       case 10:
-        emit_aux('M', m->code10 / 10, true);
+        emit_aux('M', m->code10 / 10.0, true);
         break;
       case 20:
       case 300:
-        emit_aux('M', m->code10 / 10, true);
+        emit_aux('M', m->code10 / 10.0, true);
         finished_ = true;
         break;
       case 990:

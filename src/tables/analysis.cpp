@@ -9,8 +9,7 @@
 
 #include "core/error.hpp"
 
-namespace cncore::tables {
-namespace detail {
+namespace cncore::tables::detail {
 
 double value_of_signal(const Values& values, int number, double t_s, bool& found) {
   double v = 0;
@@ -182,5 +181,4 @@ bool Analyzer::next(const Values& values, double t_s, EffectivePoint& out) {
   return true;
 }
 
-}  // namespace detail
-}  // namespace cncore::tables
+}  // namespace cncore::tables::detail
