@@ -248,21 +248,42 @@ int command_check(const CheckArgs& a) {
     std::fwrite(out.data(), 1, out.size(), stdout);
     out.clear();
   };
-  try {
-    while (interpreter.next(b)) {
-      ++blocks;
-      if (b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc) {
-        ++motion;
+  // Every error is reported: after one, the interpreter goes on with the next line. Errors
+  // after the first may be its consequences; a repeated error or too many end the check.
+  constexpr int kMaxErrors = 50;
+  int errors = 0;
+  std::string last_error;
+  for (;;) {
+    try {
+      if (!interpreter.next(b)) break;
+    } catch (const InputError& e) {
+      flush();  // the blocks before the error are listed, then the error goes to stderr
+      std::fflush(stdout);
+      const std::string text = e.formatted();
+      if (text == last_error) break;
+      std::cerr << text << "\n";
+      last_error = text;
+      if (++errors >= kMaxErrors) {
+        std::cerr << a.program << ": too many errors, stopping the check\n";
+        break;
       }
-      if (a.blocks) {
-        out += interp::format_block(b, machine);
-        out += '\n';
-        if (out.size() > (1 << 16)) flush();
-      }
+      if (!interpreter.recover()) break;
+      continue;
     }
-  } catch (const InputError&) {
-    flush();  // the blocks before the error are listed, then the error goes to stderr
-    throw;
+    ++blocks;
+    if (b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc) {
+      ++motion;
+    }
+    if (a.blocks) {
+      out += interp::format_block(b, machine);
+      out += '\n';
+      if (out.size() > (1 << 16)) flush();
+    }
+  }
+  if (errors > 0) {
+    flush();
+    std::fflush(stdout);
+    return 1;
   }
   if (!a.blocks) out = fmt::format("{}: ok, {} blocks ({} motion)\n", a.program, blocks, motion);
   std::fwrite(out.data(), 1, out.size(), stdout);
@@ -468,8 +489,7 @@ int main_cli(int argc, char** argv) {
       ->type_name("N=V");
 
   CheckArgs ca;
-  CLI::App* check =
-      app.add_subcommand("check", "Interpret a program only and report the first error.");
+  CLI::App* check = app.add_subcommand("check", "Interpret a program only and report every error.");
   check->add_option("PROGRAM", ca.program, "Part program (G-code)")
       ->required()
       ->type_name("FILE.ngc");

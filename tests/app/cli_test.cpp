@@ -202,6 +202,21 @@ TEST_F(Cli, BadProgramIsExitOneWithFileLineColumn) {
   }
 }
 
+TEST_F(Cli, CheckReportsEveryErrorWithItsLine) {
+  // Errors on lines 2 (unknown word), 4 (two motion words) and 6 (division by zero, at the /).
+  write(dir_ / "many.ngc", "G21 G90 G1 F1000\nX10 E5\nX20\nG0 G1 X30\nX40\nX[1/0]\nM30\n");
+  const Result r = run("check many.ngc --blocks");
+  EXPECT_EQ(r.code, 1) << r.err;
+  std::vector<std::string> lines;
+  std::istringstream err(r.err);
+  for (std::string l; std::getline(err, l);) lines.push_back(l.substr(0, l.find(": error: ")));
+  EXPECT_EQ(lines, (std::vector<std::string>{"many.ngc:2:5", "many.ngc:4:4", "many.ngc:6:4"}))
+      << r.err;
+  // The good lines are still listed: X20 and X40.
+  EXPECT_NE(r.out.find("20.0000"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("40.0000"), std::string::npos) << r.out;
+}
+
 TEST_F(Cli, ErrorAtTheLastLineLeavesNoOutputAndNoTemporary) {
   std::string program = "G21 G90 G17\nG1 X10 F3000\n";
   for (int i = 0; i < 200; ++i) program += i % 2 ? "G1 X10\n" : "G1 X20\n";
