@@ -55,8 +55,9 @@ using P = testing::Property;
 // straight back along the previous one) the checker finds the cycle that passes the joint at
 // 2·Vg. On camotics/wave.gcode (CSV, look-ahead) the tool moves 1 µm per cycle through the
 // reversal, z 2.9995 → 3 → 2.9995 → 2.9985: the sample on the fold lies on both segments, so the
-// projection may keep it on the first one and charge the next cycle 2 µm. Likely the checker's
-// projection, not the kernel; the checker owner decides.
+// projection may keep it on the first one and charge the next cycle 2 µm. Same on
+// camotics/genes-encoder.ngc line 27 (t = 3211.08 s): 0.776 µm per cycle through the fold, the
+// checker reports 1.552 mm/s. Likely the checker's projection, not the kernel; its owner decides.
 constexpr KnownViolation kReversal{
     "P2 joint speed at 180-degree reversals: 2.0 mm/s > Vg 1.0 mm/s (Amax*tau/(2 sin 90deg))",
     P::kJointSpeed, P::kJointSpeed, 2.0 * 1.0001};
