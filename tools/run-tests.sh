@@ -9,7 +9,9 @@ total=$(grep -oE 'tests passed, [0-9]+ tests failed out of [0-9]+' "$log" | grep
 failed=$(grep -oE '[0-9]+ tests failed out of' "$log" | grep -oE '^[0-9]+' | tail -1)
 total=${total:-0}
 failed=${failed:-0}
+skipped=$(grep -cE '^[[:space:]]*[0-9]+ - .*\(Skipped\)$' "$log")
 rm -f "$log"
-echo "$((total - failed)) passed, ${failed} failed"
+[ "$skipped" -gt 0 ] && echo "${skipped} skipped (named above; the reason is in each test's output)"
+echo "$((total - failed - skipped)) passed, ${failed} failed"
 if [ "$total" -eq 0 ]; then echo "no tests ran"; exit 1; fi
 exit "$rc"
