@@ -240,6 +240,18 @@ double joint_speed_pc(const Segment& a, const Segment& b, const Limits& lim) {
       v = std::min(v, 0.9 * 8 * tol / ((lim.post_cycles + 1) * sin_theta));
     }
   }
+  // With the moving-average acc/dec a slow corner costs more than a stop. Passing at Vg, the
+  // commanded position crawls through the range Vg·T and on until the filtered tool has passed
+  // the joint (the mean of the last T positions reaches it after T + (T−1)/2 cycles): about
+  // 1.5·T·(1 − Vg/W) cycles lost against the speed W reached around the corner. A stop loses T
+  // cycles (the filter empties). So below W/3 the stop is faster, and it keeps every limit.
+  // W is at most the blocks' Vb and feed, and L/T on a block of length L (the filtered speed of
+  // a move of L shorter than a ramp peaks at L/T): on tiny segments one crawl passes many
+  // corners, and stopping at each would lose T every time.
+  const double t = static_cast<double>(lim.t_cycles);
+  const double w =
+      std::min({a.vb_pc, b.vb_pc, a.feed_pc, b.feed_pc, a.length_mm / t, b.length_mm / t});
+  if (v < w / 3) v = 0;
   return std::max(0.0, v);
 }
 

@@ -51,27 +51,19 @@ struct CorpusProgram {
 };
 
 using P = testing::Property;
-// Measured 25 Nov 2026 (see the report to issue 3): at a 180° reversal (a block that goes
-// straight back along the previous one) the checker finds the cycle that passes the joint at
-// 2·Vg. On camotics/wave.gcode (CSV, look-ahead) the tool moves 1 µm per cycle through the
-// reversal, z 2.9995 → 3 → 2.9995 → 2.9985: the sample on the fold lies on both segments, so the
-// projection may keep it on the first one and charge the next cycle 2 µm. Same on
-// camotics/genes-encoder.ngc line 27 (t = 3211.08 s): 0.776 µm per cycle through the fold, the
-// checker reports 1.552 mm/s. Likely the checker's projection, not the kernel; its owner decides.
-constexpr KnownViolation kReversal{
-    "P2 joint speed at 180-degree reversals: 2.0 mm/s > Vg 1.0 mm/s (Amax*tau/(2 sin 90deg))",
-    P::kJointSpeed, P::kJointSpeed, 2.0 * 1.0001};
+// Measured 25 Nov 2026 (see the report to issue 3): at a 180° reversal passed at Vg the checker
+// found the cycle through the joint at 2·Vg (the sample on the fold lies on both segments, so its
+// projection may keep it on the first one). Since look-ahead stops at corners whose Vg is below a
+// third of the speed reached around it (src/planner/segment.cpp), most reversals stop and those
+// entries are gone. Kept: stress_test (0.01 mm segments: too short to reach a speed worth a stop)
+// and genes-encoder line 27 (a plunge at F = 0.776 mm/s after a reversal).
 
 // The programs of the corpus that `cncore check` accepts on the built-in machine (the others are
 // rejected with an error naming the unsupported feature; see tests/interpreter/test_corpus.cpp
 // and the test CorpusList below).
 const CorpusProgram kPrograms[] = {
     {"camotics/bear.nc"},
-    {"camotics/botomata_bottom.nc",
-     false,
-     {"P2 joint speed at 180-degree reversals, lines 4603 4680 4757 4834 5649 ... (8): 1.99999999 "
-      "mm/s > Vg 1 mm/s",
-      P::kJointSpeed, P::kJointSpeed, 2.0 * 1.0001}},
+    {"camotics/botomata_bottom.nc", false},
     {"camotics/compass.ngc"},
     {"camotics/genes-encoder.ngc",
      false,
@@ -80,10 +72,7 @@ const CorpusProgram kPrograms[] = {
       "(speed) and > Vg 1 mm/s (joint)",
       P::kSpeed, P::kJointSpeed, 1.5522 * 1.0001}},
     {"camotics/heart.ngc"},
-    {"camotics/locket_outside.ngc",
-     true,
-     {"P2 joint speed at 180-degree reversals, lines 9256 and 9259: 1.99999999 mm/s > Vg 1 mm/s",
-      P::kJointSpeed, P::kJointSpeed, 2.0 * 1.0001}},
+    {"camotics/locket_outside.ngc"},
     {"camotics/slant_test.nc",
      true,
      {},
@@ -94,10 +83,7 @@ const CorpusProgram kPrograms[] = {
       P::kSpeed, P::kSpeed, 0.5 * 1.0001}},
     {"camotics/tiny_cat_outline.ngc"},
     {"camotics/vcarve.ngc"},
-    {"camotics/wave.gcode",
-     true,
-     {"P2 joint speed at the 180-degree reversal before line 7 (t = 0.299 s): 2 mm/s > Vg 1 mm/s",
-      P::kJointSpeed, P::kJointSpeed, 2.0 * 1.0001}},
+    {"camotics/wave.gcode"},
     {"cncjs/arc-xz-plane.gcode"},
     {"cncjs/arc-yz-plane.gcode"},
     {"cncjs/circle-inch.gcode"},
@@ -109,16 +95,9 @@ const CorpusProgram kPrograms[] = {
     {"linuxcnc-tp/circle_small_segments_ncd.ngc"},
     {"linuxcnc-tp/line-contouring-xz.ngc"},
     {"linuxcnc-tp/short_segments_0.001.ngc"},
-    {"linuxcnc-tp/tight-corner-tolerance.ngc",
-     true,
-     {"P2 joint speed at 111 reversals (179.9+ degrees), lines 4, 6, 8, ... (t = 0.279 s ...): "
-      "2 mm/s > Vg 1 mm/s",
-      P::kJointSpeed, P::kJointSpeed, 2.0 * 1.0001}},
+    {"linuxcnc-tp/tight-corner-tolerance.ngc"},
     {"linuxcnc-tp/zigzag_0.002_0.0005.ngc"},
-    {"linuxcnc/3dtest.ngc",
-     true,
-     {"P2 joint speed at 180-degree reversals, lines 11 13 19 28 30 ... (6): 2 mm/s > Vg 1 mm/s",
-      P::kJointSpeed, P::kJointSpeed, 2.0 * 1.0001}},
+    {"linuxcnc/3dtest.ngc"},
     {"linuxcnc/arcspiral.ngc"},
     {"linuxcnc/factorial.ngc"},
     {"linuxcnc/flowsnake.ngc"},

@@ -89,9 +89,11 @@ TEST_P(BothModes, CornerExampleKeepsEveryLimit) {
   EXPECT_EQ(r.mismatches, 0u);
   expect_ends(r, AxisVec{}, p.pos);
   if (GetParam() == Mode::kLookahead) {
+    // Its 45° corners have Vg = 2.35 mm/s, below a third of the feed: crawling through them
+    // would cost 1.5·T·(1 − Vg/F) cycles against T for a stop, so look-ahead stops there.
     for (const auto& j : rep.joints) {
       if (!j.stop) {
-        EXPECT_GE(j.speed_mm_s, j.vg_mm_s * 0.9) << "corner passed far too slowly";
+        EXPECT_LE(j.speed_mm_s, m.max_accel_mm_s2 * m.period_s * 1.005) << "corner not stopped";
       }
     }
   }

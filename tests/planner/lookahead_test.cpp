@@ -131,8 +131,15 @@ TEST(Segment, TimeConstantAndCornerSpeedByHand) {
   b.end.set_xyz({10, 10, 0});
   const Segment sa = make_motion_segment(a, l), sb = make_motion_segment(b, l);
   EXPECT_DOUBLE_EQ(sa.length_mm, 10);
-  // 90°: V = Amax·τ / (2 sin 45°) = 2 mm/s / 1.41421 = 1.41421 mm/s = 0.00141421 mm/cycle.
-  EXPECT_NEAR(joint_speed_pc(sa, sb, l), 0.001 * 2 / std::sqrt(2.0), 1e-12);
+  // 90°: V = Amax·τ / (2 sin 45°) = 2 mm/s / 1.41421 = 1.41421 mm/s, far below a third of the
+  // feed (166.7 mm/s / 3): crawling through the corner would cost more than a stop, so 0.
+  EXPECT_EQ(joint_speed_pc(sa, sb, l), 0.0);
+  // 1°: V = 0.002 mm/cycle² / (2 sin 0.5°) = 0.114591 mm/cycle ≥ 0.166667 / 3: passed at V.
+  const double a1 = 1.0 * std::numbers::pi / 180;
+  Block c = b;
+  c.end.set_xyz({10 + 10 * std::cos(a1), 10 * std::sin(a1), 0});
+  const Segment sc = make_motion_segment(c, l);
+  EXPECT_NEAR(joint_speed_pc(sa, sc, l), 0.002 / (2 * std::sin(a1 / 2)), 1e-12);
 }
 
 TEST(Segment, ArcShapeSpeedLengthAndEndPoint) {
