@@ -28,9 +28,7 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;
   }
   try {
-    const cncore::MachineConfig machine = machine_file.empty()
-                                              ? cncore::default_machine_config()
-                                              : cncore::load_machine_config(machine_file);
+    const cncore::MachineConfig machine = cncore::machine_config_or_default(machine_file);
     const cncore::testing::Limits lim = cncore::testing::limits_from_config(machine);
     cncore::interp::Interpreter in(program, machine, {});
     cncore::bound::BoundBuilder builder(lim);

@@ -34,9 +34,7 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;
   }
   try {
-    const cncore::MachineConfig machine = machine_file.empty()
-                                              ? cncore::default_machine_config()
-                                              : cncore::load_machine_config(machine_file);
+    const cncore::MachineConfig machine = cncore::machine_config_or_default(machine_file);
     cncore::testing::Limits lim = cncore::testing::limits_from_config(machine);
     if (path_tol > 0) lim.path_tolerance_mm = path_tol;
     if (margin >= 0) lim.margin = margin;

@@ -105,9 +105,7 @@ int main(int argc, char** argv) {
 #ifdef CNCORE_GEN_HAS_INTERPRETER
   if (*rf) {
     try {
-      const cncore::MachineConfig machine = machine_file.empty()
-                                                ? cncore::default_machine_config()
-                                                : cncore::load_machine_config(machine_file);
+      const cncore::MachineConfig machine = cncore::machine_config_or_default(machine_file);
       cncore::interp::Interpreter in(program, machine, {});
       gen::GcodeWriter w(out, factor);
       cncore::Block b;

@@ -129,7 +129,7 @@ interp::Options interpreter_options(const std::vector<std::string>& vars,
 }
 
 MachineConfig machine_from(const std::string& path) {
-  return path.empty() ? default_machine_config() : load_machine_config(path);
+  return machine_config_or_default(path);
 }
 
 void require_readable(const std::string& path) {

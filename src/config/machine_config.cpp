@@ -431,4 +431,8 @@ std::string machine_config_to_toml(const MachineConfig& c) {
   return o;
 }
 
+MachineConfig machine_config_or_default(const std::string& path) {
+  return path.empty() ? default_machine_config() : load_machine_config(path);
+}
+
 }  // namespace cncore

@@ -76,6 +76,9 @@ MachineConfig default_machine_config();
 // Reads a TOML file. Keys left out keep the built-in default. Unknown keys and out-of-range
 // values throw InputError naming the key (FILE:LINE:COL of the offending key).
 MachineConfig load_machine_config(const std::string& path);
+// The configuration in `path`, or the built-in default when `path` is empty (the --machine
+// option of every command and tool).
+MachineConfig machine_config_or_default(const std::string& path);
 MachineConfig parse_machine_config(std::string_view toml_text, const std::string& source_name);
 
 // The configuration as TOML with a comment on every key (what `cncore machine` prints); parsing
