@@ -25,6 +25,7 @@
 #include "io/summary.hpp"
 #include "io/trajectory_csv.hpp"
 #include "simulation/run.hpp"
+#include "simulation/stepper.hpp"
 #include "tables/table.hpp"
 
 namespace {
@@ -298,6 +299,7 @@ struct TableArgs {
   std::optional<double> spindle_rpm, master_speed_mm_min;
   std::uint32_t repeat = 1;
   std::vector<std::string> vars, params, signals, signals_at;
+  std::string master_program;  // REF AXIS: a part program moves the master axis
 };
 
 // "N=V" with an integer N >= 0 (an optional leading prefix such as '#' or 'P' is accepted).
@@ -372,6 +374,16 @@ std::string format_table_summary(const io::Summary& s, const tables::RunSummary&
   o += fmt::format("axis speed    {} (mm/min or deg/min)\n", speeds);
   o += fmt::format("axis accel    {} (mm/s² or deg/s²)\n", accels);
   o += fmt::format("path length   {:.3f} mm (X Y Z)\n", s.path_length_mm);
+  if (s.aux_event_count > 0) {
+    std::string list;
+    for (std::size_t i = 0; i < s.aux_events.size() && i < 8; ++i) {
+      const io::AuxEvent& e = s.aux_events[i];
+      list += fmt::format("{}{}{:g} at {:.3f} s (line {})", i > 0 ? ", " : "", e.letter, e.value,
+                          e.t_s, e.line);
+    }
+    o += fmt::format("m codes       {} fired: {}{}\n", s.aux_event_count, list,
+                     s.aux_event_count > 8 ? ", …" : "");
+  }
   for (const std::string& w : s.warnings) o += fmt::format("warning: {}\n", w);
   for (const std::string& w : r.warnings) o += fmt::format("warning: {}\n", w);
   return o;
@@ -414,10 +426,35 @@ int command_table(const TableArgs& a) {
     require_readable(path);
     tabs.push_back(tables::load_table(path));
   }
-  // 0 = not given: default_reference reports the REF line when a spindle or master speed is
-  // needed and missing.
-  options.reference = tables::default_reference(tabs.front(), machine, a.spindle_rpm.value_or(0),
-                                                a.master_speed_mm_min.value_or(0));
+  // A part program moving the master axis, stepped once per cycle by the table run (which
+  // owns the clock). Its other axes follow the program too.
+  std::optional<sim::ProgramStepper> master;
+  motion::Sample master_sample;
+  bool master_moving = true;
+  std::uint32_t table_axes = 0;
+  for (const tables::Table& t : tabs) table_axes |= t.axis_mask;
+  if (!a.master_program.empty()) {
+    if (tabs.front().ref_kind != tables::RefKind::kAxis) {
+      throw UsageError("--master-program: the tables must have REF AXIS <axis>");
+    }
+    if (a.master_speed_mm_min) {
+      throw UsageError("--master-program and --master-speed exclude each other");
+    }
+    require_readable(a.master_program);
+    master.emplace(a.master_program, machine, motion::KernelOptions{});
+    const std::size_t axis = tabs.front().ref_axis;
+    // rate 0: the reference rate is not known beforehand; the measured axis speeds and
+    // accelerations in the summary are checked instead.
+    options.reference = {0, 0, [&, axis](double /*t_s*/) {
+                           if (master_moving) master_moving = master->next(master_sample);
+                           return master_sample.position[axis];
+                         }};
+  } else {
+    // 0 = not given: default_reference reports the REF line when a spindle or master speed is
+    // needed and missing.
+    options.reference = tables::default_reference(
+        tabs.front(), machine, a.spindle_rpm.value_or(0), a.master_speed_mm_min.value_or(0));
+  }
   const tables::TablePlan plan = tables::plan_tables(std::move(tabs), machine, options);
   if (a.print_effective) std::cout << tables::format_effective(plan) << std::flush;
   for (const tables::Diagnostic& d : plan.diagnostics) std::cerr << d.formatted() << '\n';
@@ -428,18 +465,31 @@ int command_table(const TableArgs& a) {
   if (!a.trajectory.empty()) {
     io::TrajectoryColumns cols;
     cols.ref = true;
+    for (const tables::Table& t : plan.tables) {
+      for (const tables::Row& r : t.rows) cols.m_code = cols.m_code || !r.m_codes.empty();
+    }
     csv.emplace(a.trajectory, machine, cols);
   }
   std::optional<io::AtomicOutputFile> json;
   if (!a.summary.empty()) json.emplace(a.summary);
 
   io::SummaryObserver summary(machine, "table");
+  summary.set_record_sample_events(false);  // every M code of a cycle, added below
   ProgressObserver progress;
   std::vector<sim::SampleObserver*> observers{&summary, &progress};
   if (csv) observers.push_back(&*csv);
   const tables::RunSummary result = tables::run_tables(plan, [&](const tables::TableSample& ts) {
     motion::Sample m = tables::to_motion_sample(ts);
     m.ref = ts.ref;
+    if (master) {
+      for (std::size_t i = 0; i < kMaxAxes; ++i) {
+        if (((table_axes >> i) & 1U) == 0) m.position[i] = master_sample.position[i];
+      }
+      m.path_position = m.position;
+    }
+    for (const tables::MEvent& e : ts.m_codes) {
+      summary.add_event({ts.t_s, e.line, 'M', static_cast<double>(e.code)});
+    }
     for (sim::SampleObserver* o : observers) o->on_sample(m);
   });
   for (sim::SampleObserver* o : observers) o->on_finish();
@@ -448,6 +498,10 @@ int command_table(const TableArgs& a) {
   if (csv) csv->commit();
   if (json) json->commit();
   std::cout << format_table_summary(summary.summary(), result, plan, machine);
+  if (master && master_moving) {
+    std::cout << "master        the program was still running when the tables ended (line "
+              << master_sample.line << ", t = " << master_sample.t_s << " s)\n";
+  }
   if (csv) std::cout << "trajectory    " << a.trajectory << "\n";
   if (json) std::cout << "summary       " << a.summary << "\n";
   return 0;
@@ -537,6 +591,10 @@ int main_cli(int argc, char** argv) {
       ->add_option("--master-speed", ta.master_speed_mm_min,
                    "Master axis speed for REF AXIS, mm/min (deg/min for a rotary axis)")
       ->type_name("MM_MIN");
+  table
+      ->add_option("--master-program", ta.master_program,
+                   "REF AXIS: a part program moves the master axis (its other axes too)")
+      ->type_name("FILE.ngc");
   table->add_option("--repeat", ta.repeat, "Repetitions of a CYCLIC table without a count")
       ->check(CLI::Range(1U, 1000000000U))
       ->type_name("N");

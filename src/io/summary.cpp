@@ -126,10 +126,18 @@ void SummaryObserver::travel_check(const motion::Sample& s) {
   }
 }
 
+void SummaryObserver::add_event(const AuxEvent& event) {
+  if (summary_.aux_events.size() < Summary::kMaxAuxEvents) summary_.aux_events.push_back(event);
+  ++summary_.aux_event_count;
+}
+
 void SummaryObserver::on_sample(const motion::Sample& s) {
   ++summary_.cycles;
   summary_.cycle_time_s = s.t_s;
   travel_check(s);
+  if (record_sample_events_ && s.aux_letter != 0) {
+    add_event({s.t_s, s.line, s.aux_letter, s.aux_value});
+  }
 
   // Contour error: distance from the servo set-point to the polyline of recent on-path points.
   const Vec3 path = s.path_position.xyz();
@@ -216,12 +224,14 @@ void SummaryObserver::on_finish() {
   }
   // Limits the machine must keep, checked on the measured trajectory (small numeric margin).
   auto& w = summary_.warnings;
+  // Tables drive each axis on its own: only the per-axis limits govern them.
+  const bool path_limits = summary_.mode != "table";
   const double vmax = std::max(machine_.max_feed_mm_min, machine_.rapid_mm_min);
-  if (summary_.max_feed_mm_min > vmax * 1.001 + 1e-6) {
+  if (path_limits && summary_.max_feed_mm_min > vmax * 1.001 + 1e-6) {
     w.push_back(fmt::format("path speed {:.1f} mm/min exceeds the machine's {:.1f} mm/min",
                             summary_.max_feed_mm_min, vmax));
   }
-  if (summary_.max_tangential_accel_mm_s2 > machine_.max_accel_mm_s2 * 1.01 + 1e-3) {
+  if (path_limits && summary_.max_tangential_accel_mm_s2 > machine_.max_accel_mm_s2 * 1.01 + 1e-3) {
     w.push_back(fmt::format("tangential acceleration {:.1f} mm/s² exceeds Amax {:.1f} mm/s²",
                             summary_.max_tangential_accel_mm_s2, machine_.max_accel_mm_s2));
   }
@@ -240,7 +250,7 @@ void SummaryObserver::on_finish() {
                               a.max_accel_mm_s2, u));
     }
   }
-  if (summary_.max_contour_error_mm > machine_.contour_tolerance_mm * 1.001 + 1e-9) {
+  if (path_limits && summary_.max_contour_error_mm > machine_.contour_tolerance_mm * 1.001 + 1e-9) {
     w.push_back(fmt::format("contour error {:.4f} mm exceeds the tolerance {:.4f} mm",
                             summary_.max_contour_error_mm, machine_.contour_tolerance_mm));
   }
@@ -284,6 +294,13 @@ std::string summary_to_json(const Summary& s, const MachineConfig& machine) {
     spots.push_back(o);
   }
   j["slowest_spots"] = spots;
+  nlohmann::ordered_json events = nlohmann::ordered_json::array();
+  for (const AuxEvent& e : s.aux_events) {
+    events.push_back(
+        {{"t_s", e.t_s}, {"line", e.line}, {"code", fmt::format("{}{:g}", e.letter, e.value)}});
+  }
+  j["aux_events"] = events;
+  j["aux_event_count"] = s.aux_event_count;
   return j.dump(2) + "\n";
 }
 

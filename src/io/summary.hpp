@@ -28,6 +28,14 @@ struct SlowSpot {
   double average_feed_mm_min() const { return time_s > 0 ? length_mm / time_s * 60 : 0; }
 };
 
+// An auxiliary function (M, S, T …) reached during the run.
+struct AuxEvent {
+  double t_s = 0;
+  std::uint32_t line = 0;
+  char letter = 'M';
+  double value = 0;
+};
+
 struct Summary {
   double cycle_time_s = 0;                // time of the last sample
   std::uint64_t blocks = 0;               // motion blocks (G0, G1, G2/G3) executed
@@ -42,7 +50,10 @@ struct Summary {
   double max_servo_lag_mm = 0;      // servo set-point to the same cycle's on-path point
   std::string mode;
   std::vector<std::string> warnings;
-  std::vector<SlowSpot> slowest;  // worst first, at most 5
+  std::vector<SlowSpot> slowest;                      // worst first, at most 5
+  std::vector<AuxEvent> aux_events;                   // the first kMaxAuxEvents, in order
+  std::uint64_t aux_event_count = 0;                  // all of them
+  static constexpr std::size_t kMaxAuxEvents = 1000;  // bounded: memory flat in program length
 };
 
 class SummaryObserver : public sim::SampleObserver {
@@ -54,6 +65,10 @@ class SummaryObserver : public sim::SampleObserver {
   void on_finish() override;
 
   const Summary& summary() const { return summary_; }
+  // Records an auxiliary event. on_sample records the sample's own event unless the caller
+  // delivers events itself (a table cycle can fire several M codes; a sample carries one).
+  void add_event(const AuxEvent& event);
+  void set_record_sample_events(bool on) { record_sample_events_ = on; }
 
  private:
   struct Pending {
@@ -85,6 +100,7 @@ class SummaryObserver : public sim::SampleObserver {
   SlowSpot group_;
   std::vector<SlowSpot> top_;  // bounded candidate set, merged by line
   std::array<bool, kMaxAxes> travel_warned_{};
+  bool record_sample_events_ = true;
 };
 
 // Spec 05 summary JSON (plus extra keys: max_path_accel_mm_s2, max_axis_speed_mm_min,

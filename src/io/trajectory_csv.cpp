@@ -62,6 +62,7 @@ std::string TrajectoryCsvWriter::header(const MachineConfig& machine,
   if (columns.load) h += ",load";
   if (columns.load_target) h += ",load_target";
   if (columns.ref) h += ",ref";
+  if (columns.m_code) h += ",m";
   return h;
 }
 
@@ -96,6 +97,10 @@ void TrajectoryCsvWriter::on_sample(const motion::Sample& s) {
   if (columns_.load) put_optional(b, s.load_pct);
   if (columns_.load_target) put_optional(b, s.load_target_pct);
   if (columns_.ref) put_optional(b, s.ref);
+  if (columns_.m_code) {
+    b.push_back(',');
+    if (s.aux_letter == 'M') fmt::format_to(std::back_inserter(b), "{:g}", s.aux_value);
+  }
   b.push_back('\n');
   if (b.size() >= kFlushBytes) flush();
 }

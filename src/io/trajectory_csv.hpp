@@ -24,6 +24,7 @@ struct TrajectoryColumns {
   bool load = false;          // `load`, % (spec 04)
   bool load_target = false;   // `load_target`, %
   bool ref = false;           // `ref`, table reference value (spec 02: ms, mm or deg)
+  bool m_code = false;        // `m`, number of the M code fired in this cycle, empty when none
 };
 
 class TrajectoryCsvWriter : public sim::SampleObserver {

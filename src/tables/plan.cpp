@@ -265,8 +265,8 @@ TablePlan plan_tables(std::vector<Table> tables, const MachineConfig& machine,
   if (src.position && rate <= 0) {
     plan.diagnostics.push_back(
         {Diagnostic::Severity::kWarning, first.file, first.ref_line, first.ref_col,
-         "axis speed and acceleration limits not checked: the master axis is moved by a position "
-         "function with no nominal rate"});
+         "axis speed and acceleration limits not checked beforehand: the master axis has no "
+         "nominal rate (moved by a part program); the summary reports the measured ones"});
     rate = 0;
   }
   std::vector<Diagnostic> diags;

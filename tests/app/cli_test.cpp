@@ -602,3 +602,57 @@ TEST_F(Cli, TableOverTheAxisSpeedIsRefusedOrSlowedToFit) {
 }
 
 }  // namespace
+
+TEST_F(Cli, TableMasterAxisMovedByAPartProgramAndMCodesFire) {
+  // An electronic cam: Y follows X (Y = X / 5), X is moved by a part program that also lifts Z.
+  write(dir_ / "cam.tbl", "REF AXIS X\nAXES Y\nL0 Y0\nL50 Y10 M8\nL100 Y20 M9\n");
+  write(dir_ / "master.ngc", "G21 G90 G1 F3000 Z5\nX100\nM2\n");
+  const Result r =
+      run("table cam.tbl --master-program master.ngc --trajectory cam.csv --summary cam.json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = read_csv(dir_ / "cam.csv");
+  ASSERT_GT(rows.size(), 100u);
+  double max_x_speed_mm_min = 0;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    ASSERT_NEAR(rows[i].at("y"), rows[i].at("x") / 5, 1e-6) << "row " << i;
+    ASSERT_NEAR(rows[i].at("ref"), rows[i].at("x"), 1e-9) << "row " << i;
+    if (i > 0) {
+      const double dt = rows[i].at("t") - rows[i - 1].at("t");
+      max_x_speed_mm_min =
+          std::max(max_x_speed_mm_min, (rows[i].at("x") - rows[i - 1].at("x")) / dt * 60);
+    }
+  }
+  // The program's own motion: Z goes up first, X runs at its programmed 3000 mm/min.
+  EXPECT_NEAR(rows.back().at("z"), 5, 1e-6);
+  EXPECT_NEAR(rows.back().at("x"), 100, 1e-6);
+  EXPECT_NEAR(max_x_speed_mm_min, 3000, 3000 * 0.005);
+  EXPECT_GT(time_reaching(rows, "x", 1e-3), time_reaching(rows, "z", 5));
+  // M8 fires in the cycle X reaches 50, M9 at the end; both are in the summary.
+  std::vector<std::pair<double, double>> m;  // (x, code)
+  for (const auto& row : rows) {
+    // A trailing empty cell is not in the map (getline drops it).
+    const auto it = row.find("m");
+    if (it != row.end() && !std::isnan(it->second)) m.emplace_back(row.at("x"), it->second);
+  }
+  ASSERT_EQ(m.size(), 2u);
+  EXPECT_EQ(m[0].second, 8);
+  EXPECT_GE(m[0].first, 50 - 1e-9);
+  EXPECT_LT(m[0].first, 50 + 3000.0 / 60 * 0.001 + 1e-9);  // within one cycle's travel
+  EXPECT_EQ(m[1].second, 9);
+  const auto json = nlohmann::json::parse(slurp(dir_ / "cam.json"));
+  EXPECT_EQ(json.at("aux_event_count"), 2);
+  EXPECT_EQ(json.at("aux_events").at(0).at("code"), "M8");
+  EXPECT_EQ(json.at("aux_events").at(0).at("line"), 4);
+  // Table runs are not judged by path limits (the cam's Y and X together exceed no axis).
+  EXPECT_EQ(r.out.find("path speed"), std::string::npos) << r.out;
+
+  // An error in the master program: exit 1 with its FILE:LINE:COL, nothing written.
+  write(dir_ / "bad.ngc", "G21 G90 G1 F3000\nX40\nG1 X60 Q\n");
+  const Result bad = run("table cam.tbl --master-program bad.ngc --trajectory b.csv");
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.err.find("bad.ngc:3:"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir_ / "b.csv"));
+  // A master program needs REF AXIS.
+  write(dir_ / "time.tbl", "REF TIME\nAXES X\nL1000 X10\n");
+  EXPECT_EQ(run("table time.tbl --master-program master.ngc").code, 2);
+}
