@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 
 #include "core/geometry.hpp"
 
@@ -35,6 +36,12 @@ struct Block {
   double feed_mm_min = 0;  // programmed path feed (converted to mm/min); 0 for kRapid
   PathMode path_mode = PathMode::kBlend;
   double tolerance_mm = -1;  // G64 P value; < 0: the machine's contour tolerance
+  // Direction feed correction (spec 03), set by the stage between interpreter and planner
+  // (src/feedcontrol/direction_correction): the coefficient C already applied to feed_mm_min
+  // (NaN: no correction stage; 1: a move it leaves alone, e.g. G0), and whether the operator's
+  // override is ignored on this move (override mode "replace": the speed is F·C alone).
+  double correction = std::numeric_limits<double>::quiet_NaN();
+  bool override_fixed = false;
 
   // Arc / helix (kArc). The motion turns counter-clockwise about `normal` (right-hand rule):
   // G3 in G17 has normal +Z, G2 in G17 has -Z; G18 uses ±Y, G19 uses ±X.

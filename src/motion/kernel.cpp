@@ -83,6 +83,7 @@ struct Kernel::Impl {
         // that also waits for the post filter to settle, so the corner is not rounded.
         push_event(stop_event(b.line));
       }
+      any_fixed = any_fixed || seg.override_fixed;
       const std::uint64_t idx = buf.push(seg);
       if (have_motion && !barrier_since_motion && last_motion >= buf.begin_index()) {
         acc.on_joint(last_motion, buf[last_motion], buf[idx]);
@@ -209,6 +210,22 @@ struct Kernel::Impl {
     out.path_position = path_position;
     out.feed_mm_min = speed_pc / lim.period_s * 60.0;
     out.override_pct = override_pct;
+    out.correction = correction_now;
+  }
+
+  // Override mode "replace" of the direction correction (spec 03): on segments marked
+  // override_fixed the operator's override does not act. The segment under the commanded
+  // position decides, as it does for the feed inside the acc/dec (a switch at a joint acts like
+  // an override change there, which the look-ahead handles for any override ≤ ORmax).
+  double cycle_or_ratio() {
+    const double r = override_pct / 100.0;
+    if (!any_fixed || buf.empty()) return r;
+    const double cmd = acc.commanded_mm();
+    cmd_idx = std::max(cmd_idx, buf.begin_index());
+    while (cmd_idx + 1 < buf.end_index() && cmd >= buf[cmd_idx].end_mm()) ++cmd_idx;
+    if (cmd_idx >= buf.end_index()) return r;
+    const Segment& seg = buf[cmd_idx];
+    return seg.kind == ItemKind::kMotion && seg.override_fixed ? 1.0 : r;
   }
 
   bool step(Sample& out) {
@@ -221,7 +238,7 @@ struct Kernel::Impl {
     if (all_done()) return false;
     ++cycle;
     CycleInput in;
-    in.or_ratio = override_pct / 100.0;
+    in.or_ratio = cycle_or_ratio();
     in.hold = hold;
     in.stop_mm = stop_mm();
     acc.step(in);
@@ -229,6 +246,9 @@ struct Kernel::Impl {
     const double tool = acc.tool_mm();
     advance_output(tool, out);
     path_position = interpolate(tool);
+    if (out_idx < buf.end_index() && !buf.empty() && buf[out_idx].kind == ItemKind::kMotion) {
+      correction_now = buf[out_idx].correction;  // spec 03: C of the segment under the tool
+    }
     post_filter(path_position);
     retire();
     fill(out, acc.tool_speed_pc());
@@ -253,6 +273,9 @@ struct Kernel::Impl {
   double override_pct = 100;
   std::uint64_t cycle = 0;
   std::uint64_t out_idx = 0;
+  bool any_fixed = false;     // some segment ignores the override (correction "replace")
+  std::uint64_t cmd_idx = 0;  // buffer item under the commanded position (cycle_or_ratio)
+  double correction_now = std::nan("");
   bool dwelling = false;
   std::uint32_t dwell_left = 0;
 

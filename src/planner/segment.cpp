@@ -104,6 +104,8 @@ Segment make_motion_segment(const Block& b, const Limits& lim) {
                  ? (b.tolerance_mm >= 0 ? b.tolerance_mm : lim.contour_tolerance_mm)
                  : 0.0;
   s.feed_pc = s.rapid ? lim.rapid_pc : b.feed_mm_min / 60.0 * lim.period_s;
+  s.correction = b.correction;
+  s.override_fixed = b.override_fixed;
 
   const AxisVec delta = b.end - b.start;
   const double xyz_len = norm(delta.xyz());

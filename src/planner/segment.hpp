@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 
 #include "config/machine_config.hpp"
 #include "core/block.hpp"
@@ -58,6 +59,10 @@ struct Segment {
   double vb_pc = 0;    // shape passing speed Vb
   double tol_mm = 0;   // contour tolerance for the post filter at its end
   PathMode mode = PathMode::kBlend;
+  // Direction correction (spec 03), from the Block: C (already in feed_pc; reported in the
+  // samples) and whether the operator's override is ignored on this segment.
+  double correction = std::numeric_limits<double>::quiet_NaN();
+  bool override_fixed = false;
 
   // Events
   bool barrier = false;  // the motion must stop and settle before the event (dwell, M0, G9 …)
