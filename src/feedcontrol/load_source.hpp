@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-#include "feedcontrol/adaptive.hpp"
+#include "feedcontrol/settings.hpp"
 
 namespace cncore::feed {
 
@@ -46,31 +46,6 @@ class RecordedLoad final : public LoadSource {
   Axis axis_ = Axis::kTime;
   std::vector<double> x_;
   std::vector<double> load_;
-};
-
-// Depth of cut along the path: piecewise linear through (s_mm, depth_mm) points, held outside.
-// Two points at the same s make a jump (the value after the jump is the later point's).
-struct DepthProfile {
-  std::vector<double> s_mm;
-  std::vector<double> depth_mm;
-
-  double at(double path_s_mm) const noexcept;
-  // First problem (key "adaptive.plant.depth"): empty, unequal lengths, s decreasing,
-  // negative or non-finite depth.
-  std::optional<SettingsProblem> find_problem() const;
-};
-
-// Plant-model settings (keys adaptive.plant.<field>).
-struct PlantSettings {
-  double base_pct = 5;              // no-cut load (spindle idling)
-  double k_pct_per_mm2_min = 0.04;  // load per (feed mm/min × depth mm)
-  double time_constant_s = 0.05;    // first-order lag of the load behind feed × depth
-  double noise_pct = 0.5;           // standard deviation of the Gaussian measurement noise
-  std::uint64_t seed = 1;           // noise seed: the same seed gives the same run
-  DepthProfile depth;
-
-  std::optional<SettingsProblem> find_problem() const;
-  void validate(const std::string& source = "plant settings") const;
 };
 
 // load = base + k·feed·depth(s), through a first-order lag τ·dl/dt = u − l (exact discrete
