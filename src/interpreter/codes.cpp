@@ -181,11 +181,13 @@ CodeInfo m_code_info(int code10) {
       return okm(MGroup::kCoolant, "coolant off");
     case 980:
       return okm(MGroup::kSubprogram, "subprogram call");
+    case 520:
+      // LinuxCNC's adaptive feed control: M52 P1 (or no P) on, M52 P0 off (spec 04).
+      return okm(MGroup::kSubprogram, "adaptive feed control");
     case 480:
     case 490:
     case 500:
     case 510:
-    case 520:
     case 530:
       return {true, false, static_cast<int>(MGroup::kSubprogram), "override control"};
     case 620:
@@ -201,6 +203,10 @@ CodeInfo m_code_info(int code10) {
     case 720:
     case 730:
       return {true, false, static_cast<int>(MGroup::kSubprogram), "modal state save/restore"};
+    case 1600:
+      return okm(MGroup::kUser, "direction feed correction on");
+    case 1610:
+      return okm(MGroup::kUser, "direction feed correction off");
     default:
       if (code10 >= 1000 && code10 <= 1990 && code10 % 10 == 0) {
         return {true, false, static_cast<int>(MGroup::kSubprogram), "user-defined M code"};

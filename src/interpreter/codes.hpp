@@ -20,6 +20,7 @@
 //   M group 6  tool change    M6
 //   M group 7  spindle        M3 M4 M5
 //   M group 8  coolant        M7 M8 M9 (M7 and M8 may share a block)
+//   M group 10 user-defined  M160 M161 direction feed correction on / off (spec 03)
 //   M98 (subprogram call) is in a group of its own.
 #pragma once
 
@@ -52,8 +53,9 @@ enum class MGroup : std::uint8_t {
   kSpindle = 7,
   kCoolant = 8,
   kSubprogram = 9,  // M98
+  kUser = 10,       // M160 M161 (direction feed correction on / off, spec 03)
 };
-inline constexpr int kMGroupSlots = 10;
+inline constexpr int kMGroupSlots = 11;
 
 struct CodeInfo {
   bool known = false;      // false: no such code in RS274/NGC

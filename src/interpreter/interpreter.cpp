@@ -336,11 +336,44 @@ void Interpreter::Impl::execute_words() {
   }
   // 9 spindle
   if (const auto* m = w.mgroup(MGroup::kSpindle)) emit_aux('M', m->code10 / 10.0, true);
+  // 10 overrides: M52 adaptive feed control (spec 04), P1 or no P on, P0 off. An aux event
+  // that does not stop the motion: it takes effect where the tool passes it.
+  for (int i = 0; i < w.m_count; ++i) {
+    const auto& m = w.m[static_cast<std::size_t>(i)];
+    if (m.code10 != 520) continue;
+    double p = 1;
+    if (w.has('p')) {
+      const Words::Code* g_nm = w.group(GGroup::kNonModal);
+      const Words::Code* g_pc = w.group(GGroup::kPathControl);
+      const Words::Code* g_mo = w.group(GGroup::kMotion);
+      const Words::Code* other =
+          (g_nm != nullptr && (g_nm->code10 == 40 || g_nm->code10 == 100))  ? g_nm
+          : (g_pc != nullptr && g_pc->code10 == 640)                        ? g_pc
+          : (g_mo != nullptr && (g_mo->code10 == 20 || g_mo->code10 == 30)) ? g_mo
+                                                                            : nullptr;
+      if (other != nullptr) {
+        fail(m.col, fmt::format("M52 and {} both use the P word: put them in separate blocks",
+                                code_text('G', other->code10)));
+      }
+      p = w['p'].value;
+      if (p != 0 && p != 1) {
+        fail(w['p'].col, "M52 P must be 1 (adaptive feed on) or 0 (off)");
+      }
+    }
+    Block b = base_block(BlockKind::kAux);
+    b.aux_letter = 'M';
+    b.aux_value = 52;
+    b.aux_p = p;
+    out_.push_back(b);
+  }
   // 11 coolant (M7 and M8 may both be present)
   for (int i = 0; i < w.m_count; ++i) {
     const auto& m = w.m[static_cast<std::size_t>(i)];
     if (m.code10 == 70 || m.code10 == 80 || m.code10 == 90) emit_aux('M', m.code10 / 10.0, false);
   }
+  // 12 user-defined M codes: M160 / M161 switch the direction feed correction (spec 03) on / off
+  // from this block's motion on. No stop: the correction stage acts on the event in the stream.
+  if (const auto* m = w.mgroup(MGroup::kUser)) emit_aux('M', m->code10 / 10.0, false);
   // 14 dwell
   const Words::Code* nonmodal = w.group(GGroup::kNonModal);
   const int nm = nonmodal != nullptr ? nonmodal->code10 : -1;
