@@ -57,6 +57,8 @@ struct Block {
   // kAux: letter 'M', 'S' or 'T' with its value (M6 → 'M', 6; S12000 → 'S', 12000).
   char aux_letter = 0;
   double aux_value = 0;
+  // The event's P word where it carries one (M52 P1 / M52 P0: adaptive feed on / off); 0 else.
+  double aux_p = 0;
   bool aux_waits = false;  // the motion must come to a stop before the event (M0, M1, M6, ...)
 };
 

@@ -3,7 +3,7 @@
 //   N<line> LINE from <axes> to <axes> F<feed>[ <path>]
 //   N<line> ARC from <axes> to <axes> centre <x y z> normal <±X|±Y|±Z> turns <n> F<feed>[ <path>]
 //   N<line> DWELL <seconds> s
-//   N<line> AUX <M|S|T><value>[ WAIT]
+//   N<line> AUX <M|S|T><value>[ P<p> (M52)][ WAIT]
 // <path> is EXACT_PATH (G61), EXACT_STOP (G61.1, G9) or TOL <mm> (G64 P); nothing for G64.
 // Positions %.4f (mm, deg), feed %.3f mm/min.
 #include <fmt/format.h>
@@ -97,6 +97,7 @@ std::string format_with(const Block& b, const std::array<bool, kMaxAxes>& axes) 
       } else {
         s += fmt::format("{:.4f}", b.aux_value);
       }
+      if (b.aux_letter == 'M' && b.aux_value == 52) s += fmt::format(" P{:g}", b.aux_p);
       if (b.aux_waits) s += " WAIT";
       break;
     }
