@@ -13,6 +13,7 @@
 #include <optional>
 #include <sstream>
 
+#include "config/cutting_config_toml.hpp"
 #include "core/error.hpp"
 
 namespace cncore {
@@ -321,8 +322,10 @@ MachineConfig parse_machine_config(std::string_view toml_text, const std::string
   }
   MachineConfig c = default_machine_config();
   const Reader r(source_name);
+  CuttingSources cutting_at;
   for (const auto& [key, node] : root) {
     const std::string k(key.str());
+    if (read_cutting_section(source_name, key, node, c.cutting, cutting_at)) continue;
     if (k == "name") {
       const auto* s = node.as_string();
       if (s == nullptr) r.fail(key.source(), "name must be a string");
@@ -336,9 +339,12 @@ MachineConfig parse_machine_config(std::string_view toml_text, const std::string
     } else if (k == "axes") {
       read_axes(r, key, r.table(key, node, k), c);
     } else {
-      r.unknown(key, k, " (sections are [motion], [axes.<x|y|z|a|b|c>], [interpreter], [tables])");
+      r.unknown(key, k,
+                " (sections are [motion], [axes.<x|y|z|a|b|c>], [interpreter], [tables], "
+                "[stock], [[tools]], [cutting])");
     }
   }
+  validate_cutting_config(source_name, c.cutting, cutting_at);
   return c;
 }
 
@@ -428,6 +434,7 @@ std::string machine_config_to_toml(const MachineConfig& c) {
     line(n.start + " = " + num(c.start_position[i]),
          fmt::format("position at program start, {}", u));
   }
+  o += cutting_config_to_toml(c.cutting);
   return o;
 }
 

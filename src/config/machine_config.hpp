@@ -7,6 +7,7 @@
 #include <string>
 #include <string_view>
 
+#include "config/cutting_config.hpp"
 #include "core/geometry.hpp"
 
 namespace cncore {
@@ -59,6 +60,9 @@ struct MachineConfig {
   // A table that would exceed an axis limit: false → refused; true → the reference is slowed
   // by one constant factor so that it fits.
   bool table_slow_to_fit = false;
+
+  // [stock], [[tools]], [cutting] (cutting simulation, issue 7): active when stock.enabled
+  CuttingConfig cutting;
 
   friend bool operator==(const MachineConfig&, const MachineConfig&) = default;
 
