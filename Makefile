@@ -7,7 +7,7 @@ CNCORE := $(BUILD)/src/app/cncore
 
 DEB_PACKAGES := cmake ninja-build g++ make pkg-config \
   libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev libfast-float-dev \
-  libmuparser-dev libgtest-dev libgmock-dev libbenchmark-dev librapidcheck-dev time
+  libmuparser-dev libgtest-dev libgmock-dev libbenchmark-dev librapidcheck-dev libpng-dev time
 
 .PHONY: all deps configure build test demo bench format clean fuzz test-sanitize
 
