@@ -23,6 +23,8 @@ class AccDec {
  public:
   virtual ~AccDec() = default;
 
+  // A motion segment was appended to the buffer as item `index` (before on_joint with it).
+  virtual void on_segment(std::uint64_t /*index*/, const planner::Segment& /*s*/) {}
   // The successor b of motion item a (buffer index index_a) arrived: the joint is known.
   virtual void on_joint(std::uint64_t index_a, const planner::Segment& a,
                         const planner::Segment& b) = 0;

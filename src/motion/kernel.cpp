@@ -7,6 +7,7 @@
 #include <cmath>
 #include <vector>
 
+#include "motion/accel_limited.hpp"
 #include "motion/moving_average.hpp"
 #include "planner/buffer.hpp"
 #include "planner/segment.hpp"
@@ -16,14 +17,50 @@ namespace cncore::motion {
 using planner::ItemKind;
 using planner::Segment;
 
+namespace {
+
+bool accel_type(const KernelOptions& o) {
+  return o.accdec == AccDecType::kAcceleration && o.mode == Mode::kLookahead;
+}
+
+planner::Limits kernel_limits(const MachineConfig& m, const KernelOptions& o) {
+  planner::Limits l = planner::make_limits(m, o.bound_resultant_accel);
+  // No moving average to outrun: rapids at the configured rapid rate.
+  if (accel_type(o)) l.rapid_pc = m.rapid_mm_min / 60.0 * m.period_s;
+  return l;
+}
+
+// The limits segments are built with. The moving average's ramp terms of Vb (per-axis
+// (d/T)·v, arcs (1 + 1/T)) do not apply to the acceleration-limited type, which bounds the
+// tangential acceleration per segment itself (accel_limited.cpp): T → ∞ removes them.
+planner::Limits segment_limits(const planner::Limits& lim, const KernelOptions& o) {
+  planner::Limits l = lim;
+  if (accel_type(o)) l.t_cycles = 1u << 30;
+  return l;
+}
+
+std::unique_ptr<AccDec> make_accdec(const planner::SegmentBuffer& buf, const planner::Limits& lim,
+                                    const KernelOptions& o, const MachineConfig& m) {
+  if (accel_type(o)) {
+    return std::make_unique<AccelLimitedAccDec>(buf, lim, m.max_override_pct / 100.0,
+                                                o.check_reference_walk);
+  }
+  return std::make_unique<MovingAverageAccDec>(buf, lim, o.mode, m.max_override_pct / 100.0,
+                                               o.check_reference_walk);
+}
+
+}  // namespace
+
 struct Kernel::Impl {
   Impl(const MachineConfig& m, const KernelOptions& o)
       : machine(m),
         options(o),
-        lim(planner::make_limits(m, o.bound_resultant_accel)),
+        lim(kernel_limits(m, o)),
+        seg_lim(segment_limits(lim, o)),
         // Two items per block at most (an exact-stop block adds its stop event).
         buf(std::max<std::size_t>(4, static_cast<std::size_t>(m.lookahead_blocks) + 2)),
-        acc(buf, lim, o.mode, m.max_override_pct / 100.0, o.check_reference_walk),
+        acc_owner(make_accdec(buf, lim, o, m)),
+        acc(*acc_owner),
         barriers(buf.capacity()),
         post_ring(lim.post_filter() ? lim.post_cycles : 1) {
     for (std::size_t i = 0; i < kMaxAxes; ++i) last_end[i] = m.start_position[i];
@@ -74,17 +111,19 @@ struct Kernel::Impl {
       default:
         break;
     }
-    Segment seg = planner::make_motion_segment(b, lim);
+    Segment seg = planner::make_motion_segment(b, seg_lim);
     if (seg.length_mm > 0) {
       seg.s0_mm = total_mm;
       const bool joint = have_motion && !barrier_since_motion && last_motion >= buf.begin_index();
-      if (joint && planner::joint_speed_pc(buf[last_motion], seg, lim) <= 0) {
+      const bool slow_stops = !accel_type(options);
+      if (joint && planner::joint_speed_pc(buf[last_motion], seg, lim, slow_stops) <= 0) {
         // A joint that must be passed at speed 0 (exact path through the post filter): a stop
         // that also waits for the post filter to settle, so the corner is not rounded.
         push_event(stop_event(b.line));
       }
       any_fixed = any_fixed || seg.override_fixed;
       const std::uint64_t idx = buf.push(seg);
+      acc.on_segment(idx, buf[idx]);
       if (have_motion && !barrier_since_motion && last_motion >= buf.begin_index()) {
         acc.on_joint(last_motion, buf[last_motion], buf[idx]);
       }
@@ -258,8 +297,10 @@ struct Kernel::Impl {
   MachineConfig machine;
   KernelOptions options;
   planner::Limits lim;
+  planner::Limits seg_lim;
   planner::SegmentBuffer buf;
-  MovingAverageAccDec acc;
+  std::unique_ptr<AccDec> acc_owner;
+  AccDec& acc;
 
   AxisVec last_end;     // end of the last pushed motion
   double total_mm = 0;  // its path position
@@ -308,7 +349,11 @@ void Kernel::set_feed_hold(bool hold) {
   impl_->hold = hold;
 }
 std::uint64_t Kernel::reference_mismatches() const {
-  return impl_->acc.reference_mismatches();
+  if (const auto* ma = dynamic_cast<const MovingAverageAccDec*>(&impl_->acc)) {
+    return ma->reference_mismatches();
+  }
+  const auto* al = dynamic_cast<const AccelLimitedAccDec*>(&impl_->acc);
+  return al != nullptr ? al->reference_mismatches() : 0;
 }
 double Kernel::filter_time_s() const {
   return impl_->lim.span_cycles() * impl_->lim.period_s;

@@ -18,8 +18,15 @@ enum class Mode : std::uint8_t {
   kStop,       // the seed's conventional method: stop at the end of every block
 };
 
+// The acc/dec type of look-ahead mode (stop mode always uses the moving average).
+enum class AccDecType : std::uint8_t {
+  kMovingAverage,  // the seed's: look-ahead limit + moving average of T (+ T2) cycles
+  kAcceleration,   // issue 9: constant-acceleration planning before interpolation
+};
+
 struct KernelOptions {
   Mode mode = Mode::kLookahead;
+  AccDecType accdec = AccDecType::kMovingAverage;
   double override_pct = 100;  // initial feed override
   // Arcs: bound the resultant of tangential and normal acceleration by Amax (true) or each of
   // them separately (false, the seed's way: the resultant may reach √2·Amax).

@@ -226,7 +226,8 @@ double turn_speed_pc(const AxisVec& e, const AxisVec& s, const Limits& lim, doub
   return v;
 }
 
-double joint_speed_pc(const Segment& a, const Segment& b, const Limits& lim) {
+double joint_speed_pc(const Segment& a, const Segment& b, const Limits& lim,
+                      bool slow_corner_stops) {
   const AxisVec e = a.end_direction();
   const AxisVec s = b.start_direction();
   const double kappa = (a.arc ? 1 / a.rho_mm : 0.0) + (b.arc ? 1 / b.rho_mm : 0.0);
@@ -242,6 +243,7 @@ double joint_speed_pc(const Segment& a, const Segment& b, const Limits& lim) {
       v = std::min(v, 0.9 * 8 * tol / ((lim.post_cycles + 1) * sin_theta));
     }
   }
+  if (!slow_corner_stops) return std::max(0.0, v);
   // With the moving-average acc/dec a slow corner costs more than a stop. Passing at Vg, the
   // commanded position crawls through the range Vg·T and on until the filtered tool has passed
   // the joint (the mean of the last T positions reaches it after T + (T−1)/2 cycles): about

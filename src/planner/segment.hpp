@@ -89,7 +89,10 @@ Segment make_motion_segment(const Block& block, const Limits& limits);
 // Passing speed Vg at the joint from a to b (both motion segments): corner limit
 // Amax·τ/(2 sin θ/2) = Amax·τ/|S − E| from the unit tangents, per-axis corner limits
 // a_i·τ/|S_i − E_i|, min with both Vb's and, with the post filter, the contour-tolerance limit.
-double joint_speed_pc(const Segment& a, const Segment& b, const Limits& limits);
+// slow_corner_stops: the moving-average rule that turns corners much slower than the speed
+// around them into stops (see segment.cpp); the acceleration-limited type passes false.
+double joint_speed_pc(const Segment& a, const Segment& b, const Limits& limits,
+                      bool slow_corner_stops = true);
 
 // Corner limit alone for a turn from direction e to direction s within one cycle; `curvature`
 // (1/mm): the arcs' own turning next to the corner (0 between lines).

@@ -1,0 +1,437 @@
+// Acceleration-limited acc/dec before interpolation (issue 9).
+//
+// Units: path positions s in mm, the step u (the distance moved in one cycle, i.e. the speed in
+// mm/cycle), accelerations in mm/cycle². A0 = Amax·τ² is the path acceleration limit.
+//
+// 1. Caps. Every speed limit of the look-ahead window is a *cap* (V, [c, e)): every cycle whose
+//    step starts in [c, e), and every step that lands at or after c, is ≤ V.
+//      - segment speed cap: V = Vb (shape, per-axis speed), [c, e) = the segment [s0, end);
+//      - feed cap: V = F (times the runtime override OR), [s0, end);
+//      - joint cap at a corner at path position j: V = Vg, [j − Vg, j + Vg). Not just the step
+//        that crosses j: the step before it and the step after it are ≤ Vg too, so the cycle
+//        that turns the corner is not also a cycle of speed change (the checker measures the
+//        direction change from two consecutive chords: with chords Vg and Vg + A0 the measured
+//        normal acceleration is √(1 + A0/Vg) times the corner's, up to √3 at a reversal).
+//    Consecutive segments with the same cap share one cap (its e is moved on), so a fine CAM
+//    path pays no per-segment work beyond one tree update per block.
+//    Stops (the end of the window, the end of the program, dwell and waiting M-codes) come in
+//    every cycle as CycleInput::stop_mm.
+//
+// 2. Variable acceleration, σ. A segment may allow less than A0: a line whose axis share d_i
+//    times A0 exceeds axis i's limit a_i (A_seg = min(A0, a_i/d_i)), and an arc where the normal
+//    acceleration v²/ρ and the tangential one share an axis (|a_axis| ≤ √(a_t² + a_n²) times the
+//    axis share of the arc plane; with the resultant option bounded by Amax). On an arc we allow
+//    a_n ≤ min(v_top²/ρ, 0.95·g) (v_top the highest speed the arc can be run at, g the tightest
+//    axis limit over its share), so Vb = √(ρ·a_n), and a_t = min(A0, √(g² − a_n²)).
+//    With r = A_seg/A0 ∈ (0, 1] per segment, define the acceleration-weighted path coordinate
+//        σ(s) = ∫ r ds        (σ advances r·L over a segment of length L).
+//    Braking at A_seg along s is braking at A0 along σ: d(v²)/dσ = 2·A_seg/r = 2·A0. So a speed
+//    v at σ_s can still be brought down to V at σ_c iff   v² + 2·A0·σ_s ≤ V² + 2·A0·σ_c = K.
+//    K is fixed when the cap arrives: it depends neither on s nor on the current state.
+//
+// 3. Backward pass in closed form. The braking constraint of every cap ahead is
+//        v² + 2·A0·σ(s) ≤ K_i,   K_i = V_i² + 2·A0·σ(c_i),
+//    so all caps ahead act through min_i K_i — a minimum over a sliding window (caps enter at
+//    the back as blocks arrive and retire as the tool passes them). Here: tournament trees over
+//    the cap slots (planner::MinTree, O(log n) per cap, O(1) to read); no backward pass over
+//    the window and no walk per cycle.
+//    Discrete form: a step x from s lands at q = s + x with σ(q) ≤ σ(s) + x (r ≤ 1), so
+//        x² + 2·A0·(σ(s) + x) ≤ K   ⇔   x ≤ B(K, s) = √(A0² + K − 2·A0·σ(s)) − A0.
+//    (i) A step that lands at or after c has σ(q) ≥ σ(c), hence x² ≤ V²: it meets V.
+//    (ii) Following the bound is always possible: let x_k = B(K, s_k) exactly, R_k = K − 2A0σ_k
+//        = x_k² + 2A0·x_k. The step moves σ by r·x_k, so R_{k+1} = x_k² + 2A0·x_k·(1 − r) and
+//        x_{k+1} = √(A0² + R_{k+1}) − A0 ≥ x_k − r·A0 (square both sides: A0²(1−r)² ≤ A0²).
+//        A step below the bound leaves more room, so the next bound is ≥ (this step) − r·A0:
+//        the deceleration it asks for never exceeds the segment's A_seg = r·A0. The minimum of
+//        several such bounds has the same property.
+//    (iii) A cap is *active* (its plain V applies) for steps starting in [c, e); before c it
+//        acts through its K. At c the bound is already ≤ √(A0² + V²) − A0 < V, so switching
+//        to V never needs a deceleration step; with V > 0 the tool crosses c as soon as the
+//        distance left is ≤ V (B ≥ d ⇔ V ≥ d), no Zeno approach.
+//    Stops use the exact lattice form instead (V = 0 would never be reached with (ii)):
+//        (x + A0/2)² ≤ A0²/4 + 2·A0·(σ(stop) − σ(s)).
+//    Following it the steps are x, x − A0, …, A0 with the last step landing exactly on the
+//    stop (the sum of A0 + 2A0 + … + n·A0 = n(n+1)A0/2 is exactly the right side's distance);
+//    with r < 1 the decrement is ≤ r·A0 ((1/2 − r)² ≤ 1/4). The step that reaches the stop is
+//    clipped to land on it (≤ A0: P4's arrival at ≤ Amax·τ), so the last sample is the stop.
+//
+// 4. Forward pass = the cycle:  u = min(u_prev + r·A0, caps active, B(min K), stop bound).
+//
+// 5. Feed caps and the override. A feed cap's V is OR·F and OR may change at any cycle, so its
+//    key K = (OR·F)² + 2A0σ(c) depends on OR. We keep one key tree per override *level*
+//    OR_j = j·Δ (Δ = 0.1 up to 400 %): a feed cap enters every level tree with the key for OR_j;
+//    the cycle reads the tree of the highest level ≤ OR. K grows with OR, so that key is never
+//    looser than the exact one: the braking target is OR_j·F ≤ OR·F (exact at 100 %, and at
+//    every multiple of 10 %). Work: a feed cap costs one update per level when it arrives and
+//    when it is activated (only where the feed changes: equal feeds share a cap); the cycle
+//    reads one root. An override increase only raises the limits (the geometric caps and the
+//    stops, which keep every braking distance, are OR-independent); an override decrease lowers
+//    the feed limit, and the tool then decelerates at A_seg until it is below it
+//    (u ≥ u_prev − r·A0 for the feed part), which the spec and the checker allow for one ramp.
+//
+// 6. Late caps. A cap that arrives while the tool is already past its c (the interpreter was
+//    late: until then the window's last end point was a stop) is active at once. The stop the
+//    tool was braking for is at least as strict for every cap at that point, except joint caps
+//    below ~3·A0 and range caps below A0 (≤ 2 mm/s here): those may ask for one step of more
+//    than A_seg deceleration; the geometric limit wins.
+//
+// No filter follows, so the tool position is the commanded position and at rest means step 0.
+#include "motion/accel_limited.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace cncore::motion {
+
+using planner::ItemKind;
+using planner::MinTree;
+using planner::Segment;
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kArcNormalShare = 0.95;  // a_n ≤ 0.95·g on arcs where the axes couple
+
+// The largest step x from which the tool can still stop exactly at distance d with steps that
+// shrink by at most a per cycle: x + (x − a) + (x − 2a) + … (positive terms, the last one ≤ a
+// landing on the stop) ≤ d. With m the largest integer with a·m(m+1)/2 ≤ d this is
+// x = d/(m+1) + a·m/2 (d ≤ a: x = d, the landing step). Following it the steps are exactly
+// x, x − a, x − 2a, …: f(x) = x + f(x − a), so after the step the rest is f(x − a).
+double landing_step(double d, double a) {
+  if (d <= a) return d;
+  double m = std::floor((std::sqrt(8 * d / a + 1) - 1) / 2);
+  while (m > 0 && a * m * (m + 1) / 2 > d) m -= 1;
+  while (a * (m + 1) * (m + 2) / 2 <= d) m += 1;
+  return d / (m + 1) + a * m / 2;
+}
+
+double component(const Vec3& v, std::size_t i) {
+  return i == 0 ? v.x : (i == 1 ? v.y : v.z);
+}
+}  // namespace
+
+AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
+                                       const planner::Limits& limits, double or_max,
+                                       bool check_reference_walk)
+    : buf_(buffer),
+      lim_(limits),
+      a0_(limits.amax_pc2),
+      or_max_(std::max(1.0, or_max)),
+      level_step_(or_max_ <= 4.0 ? 0.1 : or_max_ / 40.0),
+      levels_(static_cast<std::size_t>(std::floor(or_max_ / level_step_ + 1e-9)) + 1),
+      sigma0_(buffer.capacity(), 0.0),
+      ratio_(buffer.capacity(), 1.0),
+      vcap_(buffer.capacity(), 0.0),
+      caps_(3 * buffer.capacity()),
+      state_(3 * buffer.capacity(), State::kEmpty),
+      entry_(3 * buffer.capacity()),
+      key_geo_(3 * buffer.capacity()),
+      active_geo_(3 * buffer.capacity()),
+      active_feed_(3 * buffer.capacity()),
+      release_(3 * buffer.capacity()),
+      check_(check_reference_walk) {
+  key_feed_.reserve(levels_);
+  for (std::size_t j = 0; j < levels_; ++j) key_feed_.emplace_back(3 * buffer.capacity());
+}
+
+double AccelLimitedAccDec::segment_accel_pc2(std::uint64_t index) const {
+  return a0_ * ratio_[buf_.slot(index)];
+}
+
+void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
+  const std::size_t slot = buf_.slot(index);
+  const AxisVec delta = s.end - s.start;
+  double r = 1;
+  double vcap = s.vb_pc;
+  // Per-axis acceleration along the direction: d_i·A ≤ a_i (lines; on arcs the linear axes
+  // outside the plane and the rotary axes move linearly too).
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
+    if (s.arc && i < 3) continue;
+    const double d = std::abs(delta[i]) / s.length_mm;
+    if (d > 1e-12) r = std::min(r, lim_.axis_amax_pc2[i] / (d * a0_));
+  }
+  if (s.arc) {
+    // Normal and tangential acceleration share the axes of the arc plane: an axis sees at most
+    // √(a_t² + a_n²)·h_i (h_i its share of the plane).
+    double g = kInf;
+    for (std::size_t i = 0; i < 3; ++i) {
+      if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
+      const double h = std::hypot(component(s.e1, i), component(s.e2, i));
+      if (h > 1e-9) g = std::min(g, lim_.axis_amax_pc2[i] / h);
+    }
+    if (lim_.bound_resultant) g = std::min(g, a0_);
+    if (g < std::sqrt(2.0) * a0_) {
+      const double v_top = std::min(s.vb_pc, s.feed_pc * or_max_);
+      const double an = std::min(v_top * v_top / s.rho_mm, kArcNormalShare * g);
+      vcap = std::min(vcap, std::sqrt(an * s.rho_mm));
+      r = std::min(r, std::min(a0_, std::sqrt(std::max(0.0, g * g - an * an))) / a0_);
+    }
+  }
+  r = std::max(r, 1e-6);
+  sigma0_[slot] = sigma_total_;
+  ratio_[slot] = r;
+  vcap_[slot] = vcap;
+  sigma_total_ += r * s.length_mm;
+
+  const bool contiguous = have_prev_ && prev_end_mm_ == s.s0_mm;
+  const Cap caps[2] = {{s.s0_mm, s.end_mm(), vcap, sigma0_[slot], false},
+                       {s.s0_mm, s.end_mm(), s.feed_pc, sigma0_[slot], true}};
+  for (std::size_t k = 0; k < 2; ++k) {
+    const std::size_t to = 3 * slot + k;
+    if (contiguous) {
+      const std::size_t from = 3 * buf_.slot(prev_index_) + k;
+      if (state_[from] != State::kEmpty && caps_[from].v == caps[k].v) {
+        // Same limit as the previous segment: extend its cap (moved to this slot so that the
+        // buffer can retire the earlier segments).
+        Cap moved = caps_[from];
+        const bool active = state_[from] == State::kActive;
+        moved.e_mm = s.end_mm();
+        clear(from);
+        insert(to, moved);
+        if (active && state_[to] != State::kActive) activate(to);
+        continue;
+      }
+    }
+    insert(to, caps[k]);
+  }
+  have_prev_ = true;
+  prev_index_ = index;
+  prev_end_mm_ = s.end_mm();
+}
+
+void AccelLimitedAccDec::insert_joint_cap(std::size_t slot_a, double joint_mm, double sigma_joint,
+                                          double ratio_a, double len_a, double vg) {
+  // σ(j − Vg): exact inside a; before a, σ(j) − Vg is smaller (r ≤ 1), so K stays strict.
+  const double sigma_c = vg <= len_a ? sigma_joint - ratio_a * vg : sigma_joint - vg;
+  insert(3 * slot_a + 2, Cap{joint_mm - vg, joint_mm + vg, vg, sigma_c, false});
+}
+
+void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const Segment& b) {
+  const std::size_t sa = buf_.slot(index_a);
+  const std::size_t sb = buf_.slot(buf_.end_index() - 1);
+  const double around = std::min(vcap_[sa], vcap_[sb]);
+  // The corner alone (no slow-corner stop rule: that belongs to the moving average).
+  double vg = std::min(planner::joint_speed_pc(a, b, lim_, false), around);
+  const bool chained = prev_.valid && prev_.index_b == index_a;
+  // A segment shorter than one step lets one cycle turn two corners at once (from the end of
+  // the segment before a to the start of b; after another short one, three). Either the speed
+  // stays ≤ a's length (no step skips a) or the combined turn is allowed (as in the moving
+  // average type). Only where the combined turn allows less than the caps already in force.
+  if (chained && a.length_mm < vg) {
+    const double pair = planner::turn_speed_pc(prev_.end_dir, b.start_direction(), lim_);
+    double both = pair < 0.999 * std::min(prev_.vg, vg) ? pair : kInf;
+    if (prev_.short_a) {
+      const double triple = planner::turn_speed_pc(prev_.end_dir2, b.start_direction(), lim_);
+      if (triple < 0.999 * std::min({prev_.vg2, prev_.vg, vg})) both = std::min(both, triple);
+    }
+    if (both < kInf) {
+      const double cap = std::max(a.length_mm, both);
+      vg = std::min(vg, cap);
+      if (cap < prev_.vg) {
+        // The joint before a (at a's start) gets the same cap.
+        const std::size_t sx = buf_.slot(prev_.index_a);
+        if (buf_.begin_index() <= prev_.index_a) {
+          insert_joint_cap(sx, a.s0_mm, sigma0_[sa], ratio_[sx], buf_[prev_.index_a].length_mm,
+                           cap);
+        }
+        prev_.vg = cap;
+      }
+    }
+  }
+  const AxisVec before = chained ? prev_.end_dir : a.end_direction();
+  const double vg_before = chained ? prev_.vg : kInf;
+  prev_ = {true, index_a,   buf_.end_index() - 1, a.end_direction(), before,
+           vg,   vg_before, a.length_mm < vg};
+  if (!(vg < 0.999 * around)) return;  // the segments' own caps already hold there
+  insert_joint_cap(sa, a.end_mm(), sigma0_[sa] + ratio_[sa] * a.length_mm, ratio_[sa], a.length_mm,
+                   vg);
+}
+
+bool AccelLimitedAccDec::holds(std::uint64_t index) const {
+  const std::size_t s = 3 * buf_.slot(index);
+  return state_[s] != State::kEmpty || state_[s + 1] != State::kEmpty ||
+         state_[s + 2] != State::kEmpty;
+}
+
+void AccelLimitedAccDec::on_retire(std::uint64_t index) {
+  const std::size_t s = 3 * buf_.slot(index);
+  clear(s);
+  clear(s + 1);
+  clear(s + 2);
+}
+
+void AccelLimitedAccDec::insert(std::size_t slot, const Cap& cap) {
+  clear(slot);
+  caps_[slot] = cap;
+  if (pos_mm_ >= cap.c_mm) {
+    activate(slot);
+    return;
+  }
+  state_[slot] = State::kApproaching;
+  entry_.set(slot, cap.c_mm);
+  const double k_sigma = 2 * a0_ * cap.sigma_c;
+  if (cap.feed) {
+    for (std::size_t j = 0; j < levels_; ++j) {
+      const double v = static_cast<double>(j) * level_step_ * cap.v;
+      key_feed_[j].set(slot, v * v + k_sigma);
+    }
+  } else {
+    key_geo_.set(slot, cap.v * cap.v + k_sigma);
+  }
+}
+
+void AccelLimitedAccDec::activate(std::size_t slot) {
+  const Cap& cap = caps_[slot];
+  if (state_[slot] == State::kApproaching) {
+    entry_.set(slot, MinTree::kEmpty);
+    if (cap.feed) {
+      for (auto& t : key_feed_) t.set(slot, MinTree::kEmpty);
+    } else {
+      key_geo_.set(slot, MinTree::kEmpty);
+    }
+  }
+  state_[slot] = State::kActive;
+  (cap.feed ? active_feed_ : active_geo_).set(slot, cap.v);
+  release_.set(slot, cap.e_mm);
+}
+
+void AccelLimitedAccDec::clear(std::size_t slot) {
+  if (state_[slot] == State::kEmpty) return;
+  const bool feed = caps_[slot].feed;
+  if (state_[slot] == State::kApproaching) {
+    entry_.set(slot, MinTree::kEmpty);
+    if (feed) {
+      for (auto& t : key_feed_) t.set(slot, MinTree::kEmpty);
+    } else {
+      key_geo_.set(slot, MinTree::kEmpty);
+    }
+  } else {
+    (feed ? active_feed_ : active_geo_).set(slot, MinTree::kEmpty);
+    release_.set(slot, MinTree::kEmpty);
+  }
+  state_[slot] = State::kEmpty;
+}
+
+void AccelLimitedAccDec::advance_current() {
+  if (buf_.empty()) return;
+  cur_ = std::max(cur_, buf_.begin_index());
+  while (cur_ + 1 < buf_.end_index() &&
+         (buf_[cur_].kind != ItemKind::kMotion || pos_mm_ >= buf_[cur_].end_mm())) {
+    ++cur_;
+  }
+}
+
+double AccelLimitedAccDec::sigma_at(double pos_mm) const {
+  if (!have_prev_ || pos_mm >= prev_end_mm_ || buf_.empty()) return sigma_total_;
+  // The last item starting at or before pos_mm (items are in path order), then back to a
+  // motion item: O(log n), only when the stop position changes.
+  std::uint64_t lo = std::max(cur_, buf_.begin_index()), hi = buf_.end_index();
+  if (lo >= hi) return sigma_total_;
+  while (hi - lo > 1) {
+    const std::uint64_t mid = lo + (hi - lo) / 2;
+    if (buf_[mid].s0_mm <= pos_mm) {
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  std::uint64_t i = lo;
+  while (i > buf_.begin_index() && buf_[i].kind != ItemKind::kMotion) --i;
+  const Segment& s = buf_[i];
+  if (s.kind != ItemKind::kMotion) return sigma_total_;
+  const std::size_t slot = buf_.slot(i);
+  return sigma0_[slot] + ratio_[slot] * std::clamp(pos_mm - s.s0_mm, 0.0, s.length_mm);
+}
+
+AccelLimitedAccDec::Bounds AccelLimitedAccDec::bound(double or_ratio, double sigma_p) const {
+  auto brake = [&](double k) {
+    if (k == kInf) return kInf;
+    return std::sqrt(std::max(0.0, a0_ * a0_ + k - 2 * a0_ * sigma_p)) - a0_;
+  };
+  const std::size_t level =
+      std::min(levels_ - 1, static_cast<std::size_t>(std::floor(or_ratio / level_step_ + 1e-9)));
+  const double geo = std::min(active_geo_.min(), brake(key_geo_.min()));
+  const double feed = std::min(or_ratio * active_feed_.min(), brake(key_feed_[level].min()));
+  return {geo, feed};
+}
+
+double AccelLimitedAccDec::reference_bound(double or_ratio) const {
+  // Independent of the trees and of the cap states: every cap decides by position.
+  double sigma_p = sigma_total_;
+  if (!buf_.empty() && cur_ >= buf_.begin_index() && cur_ < buf_.end_index() &&
+      buf_[cur_].kind == ItemKind::kMotion) {
+    const Segment& s = buf_[cur_];
+    const std::size_t slot = buf_.slot(cur_);
+    sigma_p = sigma0_[slot] + ratio_[slot] * std::clamp(pos_mm_ - s.s0_mm, 0.0, s.length_mm);
+  }
+  const std::size_t level =
+      std::min(levels_ - 1, static_cast<std::size_t>(std::floor(or_ratio / level_step_ + 1e-9)));
+  double out = kInf;
+  for (std::size_t i = 0; i < caps_.size(); ++i) {
+    if (state_[i] == State::kEmpty) continue;
+    const Cap& c = caps_[i];
+    if (pos_mm_ >= c.e_mm) continue;
+    if (pos_mm_ >= c.c_mm) {
+      out = std::min(out, c.feed ? or_ratio * c.v : c.v);
+    } else {
+      const double v = c.feed ? static_cast<double>(level) * level_step_ * c.v : c.v;
+      const double k = v * v + 2 * a0_ * c.sigma_c;
+      out = std::min(out, std::sqrt(std::max(0.0, a0_ * a0_ + k - 2 * a0_ * sigma_p)) - a0_);
+    }
+  }
+  return out;
+}
+
+void AccelLimitedAccDec::step(const CycleInput& in) {
+  advance_current();
+  // Caps whose range the tool has entered, then caps it has left.
+  while (entry_.min() <= pos_mm_) activate(entry_.argmin());
+  while (release_.min() <= pos_mm_) clear(release_.argmin());
+
+  double sigma_p = sigma_total_;
+  double r = 1;
+  if (!buf_.empty() && cur_ < buf_.end_index() && buf_[cur_].kind == ItemKind::kMotion) {
+    const Segment& s = buf_[cur_];
+    const std::size_t slot = buf_.slot(cur_);
+    r = ratio_[slot];
+    sigma_p = sigma0_[slot] + r * std::clamp(pos_mm_ - s.s0_mm, 0.0, s.length_mm);
+    // A step that lands in the next segment: the lower of both accelerations.
+    if (pos_mm_ + step_ + r * a0_ >= s.end_mm()) {
+      for (std::uint64_t k = cur_ + 1; k < buf_.end_index(); ++k) {
+        if (buf_[k].kind != ItemKind::kMotion) continue;
+        r = std::min(r, ratio_[buf_.slot(k)]);
+        break;
+      }
+    }
+  }
+  const double a = r * a0_;
+
+  const Bounds caps = bound(in.or_ratio, sigma_p);
+  last_bound_ = std::min(caps.geo, caps.feed);
+  if (check_ && reference_bound(in.or_ratio) != last_bound_) ++mismatches_;
+
+  if (in.stop_mm != cached_stop_mm_) {
+    cached_stop_mm_ = in.stop_mm;
+    cached_stop_sigma_ = sigma_at(in.stop_mm);
+  }
+  const double to_stop = std::max(0.0, in.stop_mm - pos_mm_);
+  const double d_sigma = std::max(0.0, cached_stop_sigma_ - sigma_p);
+  double stop_limit = std::sqrt(a0_ * a0_ / 4 + 2 * a0_ * d_sigma) - a0_ / 2;
+  stop_limit = std::max(stop_limit, std::min(to_stop, a));
+  stop_limit = std::min(stop_limit, landing_step(to_stop, a));
+
+  double u = in.hold ? step_ - a : step_ + a;
+  // Geometric caps and stops are hard limits; the feed limit may drop by more than one step's
+  // deceleration only when the override is lowered: then decelerate at A_seg.
+  u = std::min({u, std::max(step_ - a, caps.feed), caps.geo, stop_limit, to_stop});
+  u = std::max(0.0, u);
+  if (u > 0 && u >= to_stop) {
+    pos_mm_ = in.stop_mm;  // land exactly on the stop
+  } else {
+    pos_mm_ += u;
+  }
+  step_ = u;
+}
+
+}  // namespace cncore::motion

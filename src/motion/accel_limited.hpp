@@ -1,0 +1,107 @@
+// The acceleration-limited acc/dec type before interpolation (issue 9): the tool's path speed
+// changes by at most the acceleration limit per cycle, every speed limit ahead is met by braking
+// just in time, and there is no filter delay. The derivation is at the top of
+// accel_limited.cpp.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/geometry.hpp"
+#include "motion/accdec.hpp"
+#include "planner/buffer.hpp"
+#include "planner/min_tree.hpp"
+
+namespace cncore::motion {
+
+class AccelLimitedAccDec final : public AccDec {
+ public:
+  // check_reference_walk: every cycle also compute the bound by reference_bound() and count the
+  // cycles where it differs (reference_mismatches(); tests).
+  AccelLimitedAccDec(const planner::SegmentBuffer& buffer, const planner::Limits& limits,
+                     double or_max, bool check_reference_walk = false);
+
+  void on_segment(std::uint64_t index, const planner::Segment& s) override;
+  void on_joint(std::uint64_t index_a, const planner::Segment& a,
+                const planner::Segment& b) override;
+  bool holds(std::uint64_t index) const override;
+  void on_retire(std::uint64_t index) override;
+  void step(const CycleInput& in) override;
+
+  double tool_mm() const override { return pos_mm_; }
+  double tool_speed_pc() const override { return step_; }
+  double commanded_mm() const override { return pos_mm_; }
+  bool at_rest() const override { return step_ == 0; }
+
+  // The plain minimum over every live cap, by a walk (O(n); tests compare it with the trees).
+  double reference_bound(double or_ratio) const;
+  double last_bound() const { return last_bound_; }
+  std::uint64_t reference_mismatches() const { return mismatches_; }
+  // Acceleration used by this type along the segment in buffer slot of `index` (mm/cycle²).
+  double segment_accel_pc2(std::uint64_t index) const;
+
+ private:
+  // A cap: the speed limit V (mm/cycle; feed caps: F at 100 % override) holds for every cycle
+  // whose step starts in [c, e) and for every step that lands at or after c.
+  struct Cap {
+    double c_mm = 0, e_mm = 0;
+    double v = 0;
+    double sigma_c = 0;  // σ(c) (see the derivation)
+    bool feed = false;
+  };
+  enum class State : std::uint8_t { kEmpty, kApproaching, kActive };
+
+  void insert(std::size_t slot, const Cap& cap);
+  void insert_joint_cap(std::size_t slot_a, double joint_mm, double sigma_joint, double ratio_a,
+                        double len_a, double vg);
+  void activate(std::size_t slot);
+  void clear(std::size_t slot);
+  double sigma_at(double pos_mm) const;  // σ of a path position inside the buffer
+  void advance_current();
+  struct Bounds {
+    double geo, feed;
+  };
+  Bounds bound(double or_ratio, double sigma_p) const;
+
+  const planner::SegmentBuffer& buf_;
+  planner::Limits lim_;
+  double a0_;  // A0: the path acceleration limit (mm/cycle²)
+  double or_max_;
+  double level_step_;  // override levels of the feed-cap key trees
+  std::size_t levels_;
+
+  // Per buffer slot: σ at the segment start, acceleration ratio r = A_seg/A0, speed cap.
+  std::vector<double> sigma0_, ratio_, vcap_;
+  double sigma_total_ = 0;
+
+  // Caps: three slots per buffer slot (range cap of the segment's speed, of its feed, joint cap).
+  std::vector<Cap> caps_;
+  std::vector<State> state_;
+  planner::MinTree entry_, key_geo_, active_geo_, active_feed_, release_;
+  std::vector<planner::MinTree> key_feed_;  // one per override level
+
+  // Range caps of the previous segment (to extend them instead of adding a cap per segment).
+  bool have_prev_ = false;
+  std::uint64_t prev_index_ = 0;
+  double prev_end_mm_ = 0;
+
+  // The previous joint (x → a), for two or three corners within one cycle.
+  struct PrevJoint {
+    bool valid = false;
+    std::uint64_t index_a = 0, index_b = 0;
+    AxisVec end_dir;   // direction at the end of x
+    AxisVec end_dir2;  // direction at the end of the segment before x
+    double vg = 0;
+    double vg2 = 0;
+    bool short_a = false;
+  } prev_;
+
+  std::uint64_t cur_ = 0;  // buffer item under the tool
+  double pos_mm_ = 0, step_ = 0, last_bound_ = 0;
+  double cached_stop_mm_ = -1, cached_stop_sigma_ = 0;
+  bool check_ = false;
+  std::uint64_t mismatches_ = 0;
+};
+
+}  // namespace cncore::motion
