@@ -163,6 +163,20 @@ double HeightMap::sweep(const ToolProfile& tool, const Vec3& a, const Vec3& b) {
     return std::min({f(tl), f(th), f1, f2});
   };
 
+  // h(√d2) with one square root at most (this runs for most cells under the tool).
+  const double flat_r2 = tool.flat_mm() * tool.flat_mm();
+  auto lift = [&](double d2) {
+    switch (tool.shape) {
+      case ToolShape::kFlat:
+        return 0.0;
+      case ToolShape::kBall:
+        return R - std::sqrt(std::max(0.0, r2 - d2));
+      case ToolShape::kBullNose:
+        break;
+    }
+    return d2 <= flat_r2 ? 0.0 : tool.height_at(std::sqrt(d2));
+  };
+
   double removed = 0;  // Σ Δh
   for (std::size_t j = j0; j <= j1; ++j) {
     const double yc = y_of(j);
@@ -218,7 +232,7 @@ double HeightMap::sweep(const ToolProfile& tool, const Vec3& a, const Vec3& b) {
       const double px = wx - t * dx, py = wy - t * dy;
       const double d2 = px * px + py * py;
       if (d2 > r2) continue;
-      const double lower = zmin + tool.height_at(std::sqrt(d2));
+      const double lower = zmin + lift(d2);
       if (static_cast<double>(row[i]) <= lower) continue;
       const double z = horizontal ? lower : exact(wx, wy, xc, yc, lower);
       const float zf = std::max(static_cast<float>(z), bottom_f);
