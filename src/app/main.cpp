@@ -22,6 +22,7 @@
 #include "core/error.hpp"
 #include "interpreter/interpreter.hpp"
 #include "io/atomic_file.hpp"
+#include "io/report.hpp"
 #include "io/summary.hpp"
 #include "io/trajectory_csv.hpp"
 #include "simulation/run.hpp"
@@ -177,6 +178,7 @@ struct RunArgs {
   std::string program, machine, trajectory, summary, mode = "lookahead";
   std::optional<double> override_pct;
   std::vector<std::string> override_at, vars, params;
+  std::string report;  // --report FILE.html
 };
 
 int command_run(const RunArgs& a) {
@@ -215,19 +217,30 @@ int command_run(const RunArgs& a) {
   }
   std::optional<io::AtomicOutputFile> json;
   if (!a.summary.empty()) json.emplace(a.summary);
+  std::optional<io::AtomicOutputFile> html;
+  std::optional<io::ReportObserver> report;
+  if (!a.report.empty()) {
+    html.emplace(a.report);
+    report.emplace(machine, a.mode);
+  }
 
   io::SummaryObserver summary(machine, a.mode);
   ProgressObserver progress;
   std::vector<sim::SampleObserver*> observers{&summary, &progress};
   if (csv) observers.push_back(&*csv);
+  if (report) observers.push_back(&*report);
   sim::run_program(a.program, machine, options, observers);
 
   if (json) json->write(io::summary_to_json(summary.summary(), machine));
+  if (html)
+    html->write(io::render_report_html(*report, summary.summary(), machine, {a.program, ""}));
   if (csv) csv->commit();
   if (json) json->commit();
+  if (html) html->commit();
   std::cout << io::format_human_summary(summary.summary(), machine, a.program);
   if (csv) std::cout << "trajectory    " << a.trajectory << "\n";
   if (json) std::cout << "summary       " << a.summary << "\n";
+  if (html) std::cout << "report        " << a.report << "\n";
   return 0;
 }
 
@@ -527,6 +540,9 @@ int main_cli(int argc, char** argv) {
       ->type_name("FILE.csv");
   run->add_option("--summary", ra.summary, "Write the machine-readable summary (JSON)")
       ->type_name("FILE.json");
+  run->add_option("--report", ra.report,
+                  "Write a self-contained HTML page: speed, acceleration, top view, slowest lines")
+      ->type_name("FILE.html");
   run->add_option("--mode", ra.mode, "lookahead (default) or stop (stop at every block)")
       ->check(CLI::IsMember({"lookahead", "stop"}))
       ->type_name("MODE");
