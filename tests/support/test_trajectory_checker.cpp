@@ -387,6 +387,53 @@ TEST(TrajectoryChecker, RetracedPathKeepsProgressMonotone) {
   EXPECT_NEAR(rep.max_tangential_accel_mm_s2, 1000, 1e-3);
 }
 
+TEST(TrajectoryChecker, ReversalPassedAtVIsMeasuredAtVNotTwice) {
+  // Up Z and straight back down, passed at Vg = 1 mm/s (Amax·τ/2 for a 180° turn, 1 µm per
+  // cycle): the cycle through the fold goes 0.5 µm up and 0.5 µm down, so its end sample is at
+  // the same height as the sample before it and lies on both segments. Read on the first one,
+  // the next cycle would seem to cover 2 µm (the fake 2·Vg once reported on stress_test.gcode
+  // and genes-encoder.ngc).
+  const std::vector<Block> blocks = {line(P(0, 0, 0), P(0, 0, 1), 60, 1),
+                                     line(P(0, 0, 1), P(0, 0, 0), 60, 2)};
+  const Path path = build_path(blocks);
+  std::vector<double> s;
+  for (int k = 0; k <= 2000; ++k) s.push_back(0.0005 + 0.001 * k);  // 1 µm/cycle, fold mid-cycle
+  s.back() = 2;
+  Trajectory tr = follow(path, s);
+  const auto rep = check_trajectory(tr, blocks, Limits{});
+  EXPECT_EQ(rep.count(Property::kJointSpeed), 0u) << rep.summary();
+  EXPECT_EQ(rep.count(Property::kSpeed), 0u) << rep.summary();
+  EXPECT_NEAR(rep.max_speed_mm_s, 1.0, 1e-6) << rep.summary();
+
+  // The same reversal passed at 4 mm/s is still a violation, whichever reading is taken.
+  std::vector<double> fast;
+  for (int k = 0; k <= 500; ++k) fast.push_back(0.002 + 0.004 * k);
+  fast.back() = 2;
+  const auto rep_fast = check_trajectory(follow(path, fast), blocks, Limits{});
+  EXPECT_GT(rep_fast.count(Property::kJointSpeed), 0u) << rep_fast.summary();
+}
+
+TEST(TrajectoryChecker, ArrivalAtASlowBlockIsChargedToTheBlockItCameBy) {
+  // G0 to an exact stop at X10, then G1 F5: the last cycle of the G0 lands on the G1's start at
+  // 0.5 mm/s (Amax·τ/2 with 1000 mm/s²). That cycle moved on the G0; once on the G1 the speed
+  // must be ≤ 5 mm/min. (slant_test.nc in stop mode was once charged F5 for that cycle.)
+  std::vector<Block> blocks = {line(P(0, 0), P(10, 0), 0, 1), line(P(10, 0), P(11, 0), 5, 2)};
+  blocks[0].kind = BlockKind::kRapid;
+  blocks[0].path_mode = PathMode::kExactStop;
+  const Path path = build_path(blocks);
+  // The landing sample is 0.1 nm past the joint (rounding): nearer to the G1 than to the G0.
+  std::vector<double> s = trapezoid(10, 50, 1000);
+  s.back() = 10 + 1e-10;
+  s.push_back(10 + 1e-10);
+  for (int k = 1; k <= 100; ++k) s.push_back(10 + 1e-10 + k * 5.0 / 60 * kTau);
+  const auto rep = check_trajectory(follow(path, s), path, Limits{});
+  EXPECT_EQ(rep.count(Property::kSpeed), 0u) << rep.summary();
+  // One step too fast on the G1 is still found.
+  s.push_back(s.back() + 2 * 5.0 / 60 * kTau);
+  const auto rep_fast = check_trajectory(follow(path, s), path, Limits{});
+  EXPECT_EQ(rep_fast.count(Property::kSpeed), 1u) << rep_fast.summary();
+}
+
 TEST(TrajectoryChecker, HairpinLegWithinTheRoundingIsNotTakenForTheCurrentSegment) {
   // A → B is a hairpin (B goes back 0.4 µm along A, 10 µm to the side), C carries on backwards. One
   // cycle goes from A (x = 0.99962) over A's end and all of B onto C, landing 41 µm from A's part

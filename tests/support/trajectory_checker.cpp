@@ -140,46 +140,83 @@ CheckReport check_trajectory(const Trajectory& tr, const Path& path, const Limit
   const double vcap_mm_s = std::max(lim.max_feed_mm_min, lim.rapid_mm_min) / 60.0 *
                            std::max(1.0, lim.max_override_pct / 100.0);
   constexpr std::size_t kMaxScan = 200000;
+  // One sample's projection, scanning forward from (cur, cur_u). `alternatives` (may be null)
+  // receives later segments that also hold the sample within the snap distance.
+  auto project_one = [&](std::size_t k, std::size_t cur, double cur_u, double cur_s,
+                         std::vector<Projection>* alternatives) {
+    const AxisVec& p = tr.pos[k];
+    const double chord = k > 0 ? dist_axes(p, tr.pos[k - 1]) : 0.0;
+    const double reach = 4 * chord + 2 * vcap_mm_s * tau + 10 * lim.path_tolerance_mm + 1e-6;
+    Projection best{cur, cur_u, cur_s, std::numeric_limits<double>::infinity()};
+    bool hit = false;
+    std::size_t j = cur;
+    for (std::size_t scanned = 0; j < nseg && scanned < kMaxScan; ++j, ++scanned) {
+      if (j > cur && segs[j].s0_mm - cur_s > reach) break;
+      double d = 0;
+      const double u = segs[j].project(p, j == cur ? cur_u : 0.0, d);
+      if (d < best.dist) best = {j, u, segs[j].s0_mm + u * segs[j].length_mm, d};
+      if (d <= snap) {
+        hit = true;
+        break;
+      }
+    }
+    if (hit) {
+      // A later segment may be nearer still (e.g. right at a joint): look a little further.
+      // Within one cycle's travel, a later segment through the same point (a reversal folds
+      // the path onto itself) is an alternative reading of the sample.
+      const double s_hit = best.s;
+      const double horizon = s_hit + 2 * best.dist + 1e-12;
+      const double fold_horizon = s_hit + 2 * vcap_mm_s * tau + snap;
+      for (std::size_t j2 = j + 1; j2 < nseg && j2 < j + 64; ++j2) {
+        if (segs[j2].s0_mm > std::max(horizon, alternatives ? fold_horizon : horizon)) break;
+        double d = 0;
+        const double u = segs[j2].project(p, 0.0, d);
+        const Projection c{j2, u, segs[j2].s0_mm + u * segs[j2].length_mm, d};
+        if (d < best.dist && segs[j2].s0_mm <= horizon) {
+          best = c;
+        } else if (alternatives && d <= snap) {
+          alternatives->push_back(c);
+        }
+      }
+    } else {
+      // Off the path (violation, or the post-interpolation filter): also allow a small step
+      // back on the current segment so the distance is the true nearest one.
+      const PathSegment& cs = segs[cur];
+      const double back = 2 * lim.path_tolerance_mm + chord;
+      const double len6 = std::max(dist_axes(cs.end, cs.start), cs.length_mm);
+      const double umin = len6 > 0 ? std::max(0.0, cur_u - back / len6) : cur_u;
+      double d = 0;
+      const double u = cs.project(p, umin, d);
+      if (d < best.dist) best = {cur, u, cs.s0_mm + u * cs.length_mm, d};
+    }
+    return best;
+  };
   if (nseg > 0) {
     std::size_t cur = 0;
     double cur_u = 0;
     double cur_s = 0;
+    std::vector<Projection> alternatives;
     for (std::size_t k = 0; k < n; ++k) {
-      const AxisVec& p = tr.pos[k];
-      const double chord = k > 0 ? dist_axes(p, tr.pos[k - 1]) : 0.0;
-      const double reach = 4 * chord + 2 * vcap_mm_s * tau + 10 * lim.path_tolerance_mm + 1e-6;
-      Projection best{cur, cur_u, cur_s, std::numeric_limits<double>::infinity()};
-      bool hit = false;
-      std::size_t j = cur;
-      for (std::size_t scanned = 0; j < nseg && scanned < kMaxScan; ++j, ++scanned) {
-        if (j > cur && segs[j].s0_mm - cur_s > reach) break;
-        double d = 0;
-        const double u = segs[j].project(p, j == cur ? cur_u : 0.0, d);
-        if (d < best.dist) best = {j, u, segs[j].s0_mm + u * segs[j].length_mm, d};
-        if (d <= snap) {
-          hit = true;
-          break;
+      alternatives.clear();
+      Projection best = project_one(k, cur, cur_u, cur_s, &alternatives);
+      if (!alternatives.empty() && k + 1 < n) {
+        // Positions alone cannot tell a sample on a fold of the path from one just past it.
+        // Take the reading that needs the lowest speed over the two cycles around the sample
+        // (the servo set-points are consistent with it), so a reversal passed at v is not
+        // charged 2v; a real overspeed shows in every reading.
+        const double s_prev = k > 0 ? proj[k - 1].s : 0.0;
+        auto cost = [&](const Projection& c) {
+          const Projection nx = project_one(k + 1, c.seg, c.u, c.s, nullptr);
+          return std::max(c.s - s_prev, nx.s - c.s);
+        };
+        double best_cost = cost(best);
+        for (const Projection& c : alternatives) {
+          const double cc = cost(c);
+          if (cc < best_cost) {
+            best_cost = cc;
+            best = c;
+          }
         }
-      }
-      if (hit) {
-        // A later segment may be nearer still (e.g. right at a joint): look a little further.
-        const double s_hit = best.s;
-        const double horizon = s_hit + 2 * best.dist + 1e-12;
-        for (std::size_t j2 = j + 1; j2 < nseg && j2 < j + 64 && segs[j2].s0_mm <= horizon; ++j2) {
-          double d = 0;
-          const double u = segs[j2].project(p, 0.0, d);
-          if (d < best.dist) best = {j2, u, segs[j2].s0_mm + u * segs[j2].length_mm, d};
-        }
-      } else {
-        // Off the path (violation, or the post-interpolation filter): also allow a small step
-        // back on the current segment so the distance is the true nearest one.
-        const PathSegment& cs = segs[cur];
-        const double back = 2 * lim.path_tolerance_mm + chord;
-        const double len6 = std::max(dist_axes(cs.end, cs.start), cs.length_mm);
-        const double umin = len6 > 0 ? std::max(0.0, cur_u - back / len6) : cur_u;
-        double d = 0;
-        const double u = cs.project(p, umin, d);
-        if (d < best.dist) best = {cur, u, cs.s0_mm + u * cs.length_mm, d};
       }
       proj[k] = best;
       cur = best.seg;
@@ -234,7 +271,11 @@ CheckReport check_trajectory(const Trajectory& tr, const Path& path, const Limit
   for (std::size_t k = 1; k < n; ++k) {
     rep.max_speed_mm_s = std::max(rep.max_speed_mm_s, v[k]);
     if (nseg == 0) continue;
-    const PathSegment& sg = segs[proj[k].seg];
+    // A sample that lands exactly on the start of a segment arrived by the segment before: the
+    // cycle moved on that one (a G0 ending where a slow G1 starts is not charged the G1's feed).
+    std::size_t seg_k = proj[k].seg;
+    if (seg_k > proj[k - 1].seg && proj[k].s - segs[seg_k].s0_mm <= snap) --seg_k;
+    const PathSegment& sg = segs[seg_k];
     double limit = shape_limit(sg);
     if (sg.rapid) {
       if (lim.override_applies_to_rapid)
