@@ -299,6 +299,175 @@ std::string num(double v) {
   return fmt::format("{}", v);
 }
 
+// [direction_correction] (spec 03). A law is a formula string or a table [[FI, C], …]; each is
+// checked over the FI range where it applies (uphill [0, 1], downhill [−1, 0]): a coefficient that
+// is not finite or not > 0 anywhere there is an error naming the key and showing that FI.
+CorrectionLaw read_correction_law(const Reader& r, const toml::key& key, const toml::node& node,
+                                  const std::string& name) {
+  CorrectionLaw law;
+  if (const auto* s = node.as_string()) {
+    law.formula = s->get();
+    try {
+      const CorrectionEvaluator check(law);
+    } catch (const CorrectionLawError& e) {
+      // Point at the character of the formula (the string starts after its opening quote).
+      toml::source_region where = node.source();
+      if (e.position() >= 0 && where.begin.line == where.end.line) {
+        where.begin.column += static_cast<toml::source_index>(1 + e.position());
+      } else {
+        where = key.source();
+      }
+      r.fail(where, fmt::format("{}: formula \"{}\": {}", name, law.formula, e.what()));
+    }
+    return law;
+  }
+  const auto* arr = node.as_array();
+  if (arr == nullptr || arr->empty()) {
+    r.fail(key.source(),
+           fmt::format("{} must be a formula in FI, F, D (a string) or a table [[FI, C], ...]", name));
+  }
+  for (const toml::node& item : *arr) {
+    const auto* pair = item.as_array();
+    std::array<double, 2> p{};
+    bool ok = pair != nullptr && pair->size() == 2;
+    for (std::size_t i = 0; ok && i < 2; ++i) {
+      const toml::node& v = *pair->get(i);
+      if (const auto* f = v.as_floating_point()) {
+        p[i] = f->get();
+      } else if (const auto* n = v.as_integer()) {
+        p[i] = static_cast<double>(n->get());
+      } else {
+        ok = false;
+      }
+      ok = ok && std::isfinite(p[i]);
+    }
+    if (!ok) r.fail(item.source(), fmt::format("{}: every table entry must be [FI, C] (two numbers)", name));
+    if (p[0] < -1 || p[0] > 1) {
+      r.fail(item.source(), fmt::format("{}: FI = {} is outside [-1, 1]", name, p[0]));
+    }
+    if (!law.table.empty() && p[0] <= law.table.back()[0]) {
+      r.fail(item.source(), fmt::format("{}: FI = {} must be greater than the previous FI ({})",
+                                        name, p[0], law.table.back()[0]));
+    }
+    if (!(p[1] > 0)) {
+      r.fail(item.source(), fmt::format("{}: C = {} at FI = {}: the coefficient must be > 0", name,
+                                        p[1], p[0]));
+    }
+    law.table.push_back(p);
+  }
+  return law;
+}
+
+void check_correction_law(const Reader& r, const toml::source_region& where, const CorrectionLaw& law,
+                          const std::string& name, double fi_lo, double fi_hi,
+                          const MachineConfig& c) {
+  std::optional<BadCoefficient> bad;
+  try {
+    bad = find_bad_coefficient(law, fi_lo, fi_hi, c.max_feed_mm_min,
+                               c.direction_correction.tool_diameter_mm);
+  } catch (const CorrectionLawError& e) {
+    r.fail(where, fmt::format("{}: formula \"{}\" cannot be evaluated: {}", name, law.formula,
+                              e.what()));
+  }
+  if (bad) {
+    r.fail(where, fmt::format("{}: C = {} at FI = {} (F = {} mm/min, D = {} mm): the coefficient "
+                              "must be finite and > 0 for every FI in [{}, {}]",
+                              name, std::isnan(bad->c) ? std::string("NaN") : num(bad->c), bad->fi, bad->feed_mm_min,
+                              c.direction_correction.tool_diameter_mm, fi_lo, fi_hi));
+  }
+}
+
+// Where the laws were given, for the check after the whole file is read (it needs the feed
+// limit and D, whatever the order of sections and keys).
+struct CorrectionSources {
+  std::optional<toml::source_region> section, uphill, downhill;
+};
+
+void read_direction_correction(const Reader& r, const toml::key& section, const toml::table& t,
+                               MachineConfig& c, CorrectionSources& at) {
+  DirectionCorrectionConfig& d = c.direction_correction;
+  at.section = section.source();
+  std::optional<toml::source_region>& uphill_at = at.uphill;
+  std::optional<toml::source_region>& downhill_at = at.downhill;
+  for (const auto& [key, node] : t) {
+    const std::string k(key.str());
+    const std::string name = "direction_correction." + k;
+    if (k == "enabled") {
+      d.enabled = r.boolean(key, node, name);
+    } else if (k == "active_at_start") {
+      d.active_at_start = r.boolean(key, node, name);
+    } else if (k == "direction") {
+      const auto* arr = node.as_array();
+      if (arr == nullptr || arr->size() != 3) {
+        r.fail(key.source(), fmt::format("{} must be a vector [x, y, z]", name));
+      }
+      std::array<double, 3> v{};
+      for (std::size_t i = 0; i < 3; ++i) {
+        const toml::node& e = *arr->get(i);
+        if (const auto* f = e.as_floating_point()) {
+          v[i] = f->get();
+        } else if (const auto* n = e.as_integer()) {
+          v[i] = static_cast<double>(n->get());
+        } else {
+          r.fail(key.source(), fmt::format("{} must be a vector of three numbers", name));
+        }
+        if (!std::isfinite(v[i])) r.fail(key.source(), fmt::format("{} must be finite", name));
+      }
+      const Vec3 u{v[0], v[1], v[2]};
+      const double len = norm(u);
+      if (!(len > 1e-9)) {
+        r.fail(key.source(), fmt::format("{} = [{}, {}, {}] is the zero vector: it needs a "
+                                         "direction",
+                                         name, v[0], v[1], v[2]));
+      }
+      // Normalised; a vector already of unit length (to 1e-12) is kept as written, so the
+      // printed configuration reads back identical.
+      d.direction = std::abs(len - 1) > 1e-12 ? (1 / len) * u : u;
+    } else if (k == "uphill") {
+      d.uphill = read_correction_law(r, key, node, name);
+      uphill_at = key.source();
+    } else if (k == "downhill") {
+      d.downhill = read_correction_law(r, key, node, name);
+      downhill_at = key.source();
+    } else if (k == "override_mode") {
+      const auto* s = node.as_string();
+      if (s != nullptr && s->get() == "multiply") {
+        d.override_mode = CorrectionOverrideMode::kMultiply;
+      } else if (s != nullptr && s->get() == "replace") {
+        d.override_mode = CorrectionOverrideMode::kReplace;
+      } else {
+        r.fail(key.source(),
+               fmt::format("{} must be \"multiply\" (C × override) or \"replace\" (C only)", name));
+      }
+    } else if (k == "tool_diameter_mm") {
+      d.tool_diameter_mm = r.number_in(key, node, name, 0, true, 1000, "mm");
+    } else if (k == "arc_step_deg") {
+      d.arc_step_deg = r.number_in(key, node, name, 0.01, false, 90, "deg");
+    } else {
+      r.unknown(key, name);
+    }
+  }
+}
+
+void check_direction_correction(const Reader& r, const CorrectionSources& at,
+                                const MachineConfig& c) {
+  if (!at.section) return;  // the built-in laws are valid
+  const DirectionCorrectionConfig& d = c.direction_correction;
+  check_correction_law(r, at.uphill.value_or(*at.section), d.uphill, "direction_correction.uphill",
+                       0, 1, c);
+  check_correction_law(r, at.downhill.value_or(*at.section), d.downhill,
+                       "direction_correction.downhill", -1, 0, c);
+}
+
+std::string correction_law_toml(const CorrectionLaw& law) {
+  if (!law.is_table()) return toml_string(law.formula);
+  std::string s = "[";
+  for (std::size_t i = 0; i < law.table.size(); ++i) {
+    s += fmt::format("{}[{}, {}]", i > 0 ? ", " : "", num(law.table[i][0]), num(law.table[i][1]));
+  }
+  return s + "]";
+}
+
 }  // namespace
 
 MachineConfig default_machine_config() {
@@ -322,6 +491,7 @@ MachineConfig parse_machine_config(std::string_view toml_text, const std::string
   }
   MachineConfig c = default_machine_config();
   const Reader r(source_name);
+  CorrectionSources correction_at;
   CuttingSources cutting_at;
   for (const auto& [key, node] : root) {
     const std::string k(key.str());
@@ -338,13 +508,16 @@ MachineConfig parse_machine_config(std::string_view toml_text, const std::string
       read_tables(r, r.table(key, node, k), c);
     } else if (k == "axes") {
       read_axes(r, key, r.table(key, node, k), c);
+    } else if (k == "direction_correction") {
+      read_direction_correction(r, key, r.table(key, node, k), c, correction_at);
     } else {
       r.unknown(key, k,
                 " (sections are [motion], [axes.<x|y|z|a|b|c>], [interpreter], [tables], "
-                "[stock], [[tools]], [cutting])");
+                "[direction_correction], [stock], [[tools]], [cutting])");
     }
   }
   validate_cutting_config(source_name, c.cutting, cutting_at);
+  check_direction_correction(r, correction_at, c);
   return c;
 }
 
@@ -415,6 +588,31 @@ std::string machine_config_to_toml(const MachineConfig& c) {
        "SFTCAN: \"clear\" = later rows use their written L values; \"rebase\" = gaps stay shifted");
   line(fmt::format("slow_to_fit = {}", c.table_slow_to_fit),
        "a table over an axis limit: false = refused; true = reference slowed to fit");
+
+  const DirectionCorrectionConfig& dc = c.direction_correction;
+  o += "\n# Feed correction by direction of motion (spec 03, docs/direction-correction.md).\n"
+       "# FI = (unit direction of the move) · direction, in [-1, 1]: +1 along it, -1 against it.\n"
+       "# The feed of every G1/G2/G3 becomes F·C(FI) (arcs and helices per sub-arc, following the\n"
+       "# tangent); G0 is not corrected. A law is a muParser formula in FI, F (programmed feed,\n"
+       "# mm/min) and D (tool diameter, mm), or a table [[FI, C], ...] (linear between points, flat\n"
+       "# outside). Checked at load: C must be finite and > 0 over its FI range. In a program,\n"
+       "# M160 turns the correction on and M161 off (until the other or the program end).\n";
+  o += "[direction_correction]\n";
+  line(fmt::format("enabled = {}", dc.enabled),
+       "the on/off parameter; false = every run exactly as uncorrected");
+  line(fmt::format("active_at_start = {}", dc.active_at_start),
+       "on from the program start (else only after M160)");
+  line(fmt::format("direction = [{}, {}, {}]", num(dc.direction.x), num(dc.direction.y),
+                   num(dc.direction.z)),
+       "direction component (normalised; not zero), e.g. the tool axis");
+  line("uphill = " + correction_law_toml(dc.uphill), "C for FI >= 0 (the seed: C >= 1)");
+  line("downhill = " + correction_law_toml(dc.downhill), "C for FI < 0 (the seed: C < 1)");
+  line(fmt::format("override_mode = \"{}\"",
+                   dc.override_mode == CorrectionOverrideMode::kReplace ? "replace" : "multiply"),
+       "\"multiply\" = C x operator override; \"replace\" = C only (switch ignored)");
+  line("tool_diameter_mm = " + num(dc.tool_diameter_mm), "D in the formulas, mm (> 0)");
+  line("arc_step_deg = " + num(dc.arc_step_deg),
+       "arcs/helices: one C per sub-arc of at most this angle, deg (0.01 ... 90)");
 
   o +=
       "\n# One table per axis; a table present enables the axis. When a file lists any axis, only\n"

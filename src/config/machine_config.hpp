@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "config/cutting_config.hpp"
+#include "config/correction_law.hpp"
 #include "core/geometry.hpp"
 
 namespace cncore {
@@ -28,6 +29,30 @@ struct AxisConfig {
 enum class TableCancelMode : std::uint8_t {
   kClear,   // "clear": the amount becomes 0, later rows use their written reference values
   kRebase,  // "rebase": the running reference is reset by the amount, later gaps stay shifted
+};
+
+// [direction_correction] override_mode (spec 03): how the coefficient C meets the operator's
+// feed override Fr.
+enum class CorrectionOverrideMode : std::uint8_t {
+  kMultiply,  // "multiply": C × Fr (the operator's override still acts)
+  kReplace,   // "replace": C alone (the override switch is ignored on corrected moves)
+};
+
+// [direction_correction] (spec 03, seed JPH0830973B2): feed correction by direction of motion.
+// FI = (unit direction of motion) · direction, in [−1, 1]; C = uphill(FI) for FI ≥ 0, downhill(FI)
+// for FI < 0; the programmed feed of every G1/G2/G3 becomes F·C (arcs: per sub-arc).
+struct DirectionCorrectionConfig {
+  bool enabled = false;          // the seed's on/off parameter (off: the run is unchanged)
+  bool active_at_start = true;   // on from the program start (M160 / M161 switch it)
+  Vec3 direction{0, 0, 1};       // unit vector (Z by default; e.g. the tool axis)
+  CorrectionLaw uphill{"1 + 0.5*FI", {}};    // FI ≥ 0, C ≥ 1 in the seed
+  CorrectionLaw downhill{"1 + 0.5*FI", {}};  // FI < 0, C < 1 in the seed
+  CorrectionOverrideMode override_mode = CorrectionOverrideMode::kMultiply;
+  double tool_diameter_mm = 10;  // D in the formulas
+  double arc_step_deg = 5;       // arcs and helices are corrected per sub-arc of at most this
+
+  friend bool operator==(const DirectionCorrectionConfig&,
+                         const DirectionCorrectionConfig&) = default;
 };
 
 struct MachineConfig {
@@ -60,6 +85,9 @@ struct MachineConfig {
   // A table that would exceed an axis limit: false → refused; true → the reference is slowed
   // by one constant factor so that it fits.
   bool table_slow_to_fit = false;
+
+  // [direction_correction] (spec 03)
+  DirectionCorrectionConfig direction_correction;
 
   // [stock], [[tools]], [cutting] (cutting simulation, issue 7): active when stock.enabled
   CuttingConfig cutting;

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "core/error.hpp"
+#include "feedcontrol/direction_correction.hpp"
 
 namespace cncore::sim {
 
@@ -63,14 +64,27 @@ RunCounts run_program(const std::string& program_path, const MachineConfig& mach
   };
 
   bool more = true;  // the interpreter may still produce blocks
-  Block block;
+  Block source;      // interpreted block
+  Block block;       // what the kernel gets: the direction-correction stage's output (spec 03)
+  feed::DirectionCorrector corrector(machine, program_path);
   while (true) {
     // Stream: read blocks only while the execution-data buffer has room, so memory stays
-    // bounded by the buffer whatever the program length.
-    while (more && kernel.wants_block()) {
+    // bounded by the buffer whatever the program length. One interpreted block may give
+    // several kernel blocks (an arc split by the direction correction), one at a time.
+    while (kernel.wants_block()) {
       bool got = false;
       try {
-        got = interpreter.next(block);
+        got = corrector.next(block);
+        if (!got && more) {
+          more = interpreter.next(source);
+          if (more) {
+            if (is_motion(source)) ++counts.blocks;
+            if (source.kind == BlockKind::kDwell)
+              longest_dwell_s = std::max(longest_dwell_s, source.dwell_s);
+            corrector.put(source);
+            continue;
+          }
+        }
       } catch (const InputError&) {
         // Stop at the end of the last good block: the samples up to there are delivered, then
         // the error goes on to the caller (which discards its output files).
@@ -81,13 +95,9 @@ RunCounts run_program(const std::string& program_path, const MachineConfig& mach
         std::rethrow_exception(error);
       }
       if (!got) {
-        more = false;
-        kernel.end_of_program();
+        if (!more) kernel.end_of_program();
         break;
       }
-      if (is_motion(block)) ++counts.blocks;
-      if (block.kind == BlockKind::kDwell)
-        longest_dwell_s = std::max(longest_dwell_s, block.dwell_s);
       for (SampleObserver* o : observers) o->on_block(block);
       kernel.push(block);
     }
