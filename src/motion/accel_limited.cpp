@@ -71,9 +71,11 @@
 //
 // 6. Late caps. A cap that arrives while the tool is already past its c (the interpreter was
 //    late: until then the window's last end point was a stop) is active at once. The stop the
-//    tool was braking for is at least as strict for every cap at that point, except joint caps
-//    below ~3·A0 and range caps below A0 (≤ 2 mm/s here): those may ask for one step of more
-//    than A_seg deceleration; the geometric limit wins.
+//    tool was braking for is as strict as any joint cap there: the last V_t = min(A0, a_i)/2
+//    before every stop (V_t is the lowest corner cap, a reversal's) is run at ≤ V_t, and the
+//    lattice's steps landing within V_t of the stop are ≤ V_t. Not covered: a feed cap below
+//    A0 (F·OR < 2 mm/s on the built-in machine) arriving late at the tail: its first step may
+//    be up to A0.
 //
 // No filter follows, so the tool position is the commanded position and at rest means step 0.
 #include "motion/accel_limited.hpp"
@@ -130,6 +132,13 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       active_feed_(3 * buffer.capacity()),
       release_(3 * buffer.capacity()),
       check_(check_reference_walk) {
+  tail_cap_pc_ = a0_;
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    if (lim_.axis_on[i] && lim_.axis_amax_pc2[i] > 0) {
+      tail_cap_pc_ = std::min(tail_cap_pc_, lim_.axis_amax_pc2[i]);
+    }
+  }
+  tail_cap_pc_ *= 0.5;
   key_feed_.reserve(levels_);
   for (std::size_t j = 0; j < levels_; ++j) key_feed_.emplace_back(3 * buffer.capacity());
 }
@@ -420,6 +429,19 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   double stop_limit = std::sqrt(a0_ * a0_ / 4 + 2 * a0_ * d_sigma) - a0_ / 2;
   stop_limit = std::max(stop_limit, std::min(to_stop, a));
   stop_limit = std::min(stop_limit, landing_step(to_stop, a));
+  // The last V_t = min(A0, a_i)/2 before a stop (the lowest corner cap, a reversal) is run at
+  // ≤ V_t: a joint cap that arrives late at a stop's position (the window's tail) then finds
+  // the steps around it already within its cap (see 6.).
+  if (to_stop > 0) {
+    const double vt = tail_cap_pc_;
+    if (to_stop <= vt) {
+      stop_limit = std::min(stop_limit, vt);
+    } else {
+      const double k = vt * vt + 2 * a0_ * (cached_stop_sigma_ - vt);
+      stop_limit =
+          std::min(stop_limit, std::sqrt(std::max(0.0, a0_ * a0_ + k - 2 * a0_ * sigma_p)) - a0_);
+    }
+  }
 
   double u = in.hold ? step_ - a : step_ + a;
   // Geometric caps and stops are hard limits; the feed limit may drop by more than one step's

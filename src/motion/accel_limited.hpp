@@ -66,7 +66,8 @@ class AccelLimitedAccDec final : public AccDec {
 
   const planner::SegmentBuffer& buf_;
   planner::Limits lim_;
-  double a0_;  // A0: the path acceleration limit (mm/cycle²)
+  double tail_cap_pc_ = 0;  // V_t: speed of the last V_t mm before a stop
+  double a0_;               // A0: the path acceleration limit (mm/cycle²)
   double or_max_;
   double level_step_;  // override levels of the feed-cap key trees
   std::size_t levels_;

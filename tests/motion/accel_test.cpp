@@ -1,0 +1,354 @@
+// The acceleration-limited acc/dec type (issue 9), end to end: the same programs as the
+// moving-average tests (kernel_test.cpp) through the kernel with AccDecType::kAcceleration, the
+// trajectory measured by the independent checker (tests/support) — P1–P5 of spec 01 — plus what
+// is specific to this type: time against the closed-form optimum, rapids at the rapid rate,
+// exact passing speeds, the bound equal to a plain walk over the caps, random programs with
+// random override steps (RapidCheck).
+#include <gtest/gtest.h>
+#include <rapidcheck.h>
+#include <rapidcheck/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "limits.hpp"
+#include "motion_test_util.hpp"
+#include "trajectory_checker.hpp"
+
+namespace cncore::motion::test {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+testing::CheckReport check(const MachineConfig& m, const std::vector<Block>& blocks,
+                           const RunResult& r) {
+  return testing::check_trajectory(r.traj, blocks, testing::limits_from_config(m));
+}
+
+RunOpts accel_opts() {
+  RunOpts o;
+  o.kernel.accdec = AccDecType::kAcceleration;
+  o.kernel.check_reference_walk = true;
+  return o;
+}
+
+void expect_ends(const RunResult& r, const AxisVec& start, const AxisVec& end) {
+  ASSERT_GE(r.samples.size(), 1u);
+  EXPECT_EQ(r.samples.front().t_s, 0.0);
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    EXPECT_NEAR(r.samples.front().position[i], start[i], 1e-12) << "axis " << i;
+    EXPECT_NEAR(r.samples.back().position[i], end[i], 1e-9) << "axis " << i;
+  }
+  EXPECT_EQ(r.samples.back().feed_mm_min, 0.0);
+}
+
+// Runs, checks P1–P4 and that the trees gave the same bound as the walk in every cycle.
+RunResult run_checked(const MachineConfig& m, const Prog& p, RunOpts o = accel_opts(),
+                      AxisVec start = {}) {
+  const RunResult r = run(m, p.blocks, o);
+  const auto rep = check(m, p.blocks, r);
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+  EXPECT_EQ(r.mismatches, 0u);
+  expect_ends(r, start, p.pos);
+  return r;
+}
+
+// A trapezoid on one line, computed by hand: 100 mm at F 6000 (100 mm/s), A 2000 mm/s², τ 1 ms.
+// Ramp 0 → 100 mm/s takes 50 ms and 2.5 mm; cruise 95 mm takes 0.95 s; total 1.05 s (continuous
+// time). The discrete profile may need a few cycles more, never fewer.
+TEST(AccelLimited, SingleLineIsATrapezoid) {
+  const MachineConfig m = test_machine();
+  Prog p;
+  p.line_to(Vec3{60, 80, 0}, 6000);
+  const RunResult r = run_checked(m, p);
+  EXPECT_GE(r.time_s(), 1.05 - 1e-9);
+  EXPECT_LE(r.time_s(), 1.05 + 0.004);
+  const auto rep = check(m, p.blocks, r);
+  EXPECT_NEAR(rep.max_speed_mm_s, 100, 1e-6);
+  EXPECT_LE(rep.max_tangential_accel_mm_s2, 2000 * 1.000001);
+}
+
+TEST(AccelLimited, SeedAndCornerExamples) {
+  const MachineConfig m = test_machine();
+  const RunResult seed = run_checked(m, seed_example());
+  const RunResult corner = run_checked(m, corner_example());
+  // The moving average needs T = 84 cycles for every speed change; this type |ΔV|/Amax.
+  RunOpts ma;
+  const RunResult seed_ma = run(m, seed_example().blocks, ma);
+  EXPECT_LT(seed.time_s(), seed_ma.time_s());
+  std::printf("seed example: acceleration %.3f s, moving average %.3f s; corner example %.3f s\n",
+              seed.time_s(), seed_ma.time_s(), corner.time_s());
+}
+
+TEST(AccelLimited, StraightLinesOfEveryLength) {
+  const MachineConfig m = test_machine();
+  for (double len : {1e-5, 1e-3, 0.05, 0.1667, 0.5, 1.0, 7.3, 50.0, 400.0}) {
+    SCOPED_TRACE(len);
+    Prog p;
+    p.line_to(Vec3{len * 0.6, len * 0.8, 0}, 10000);
+    run_checked(m, p);
+  }
+}
+
+TEST(AccelLimited, FullCirclesInEveryPlane) {
+  const Vec3 normals[] = {{0, 0, 1}, {0, 0, -1}, {0, 1, 0}, {1, 0, 0}};
+  for (double r_mm : {0.1, 0.5, 2.0, 10.0, 100.0}) {
+    for (const Vec3& n : normals) {
+      SCOPED_TRACE(r_mm);
+      const Vec3 radial = n.x != 0 ? Vec3{0, r_mm, 0} : Vec3{r_mm, 0, 0};
+      MachineConfig mc = test_machine();
+      mc.start_position = {radial.x, radial.y, radial.z, 0, 0, 0};
+      Prog p;
+      p.pos.set_xyz(radial);
+      p.arc_to(radial, Vec3{0, 0, 0}, 10000, n);
+      AxisVec start;
+      start.set_xyz(radial);
+      const RunResult r = run_checked(mc, p, accel_opts(), start);
+      const auto rep = check(mc, p.blocks, r);
+      const double vb = std::min(mc.max_feed_mm_min / 60, std::sqrt(r_mm * mc.max_accel_mm_s2));
+      if (r_mm >= 2) {
+        EXPECT_GE(rep.max_speed_mm_s, 0.99 * vb);
+      }
+    }
+  }
+}
+
+// Corners are passed at their passing speed, not stopped at (no slow-corner rule here), and the
+// cycle that turns the corner has the corner's speed on both sides.
+TEST(AccelLimited, SharpCornersAtTheirPassingSpeed) {
+  const MachineConfig m = test_machine();
+  for (double deg : {90.0, 135.0, 168.0, 179.0}) {
+    SCOPED_TRACE(deg);
+    const double th = deg * kPi / 180;
+    Prog p;
+    p.line_to(Vec3{40, 0, 0}, 10000);
+    p.line_to(Vec3{40 + 40 * std::cos(th), 40 * std::sin(th), 0}, 10000);
+    const RunResult r = run_checked(m, p);
+    const auto rep = check(m, p.blocks, r);
+    ASSERT_GE(rep.joints.size(), 1u);
+    const auto& j = rep.joints[0];  // the corner (the end of the program may be listed too)
+    // Vg = Amax·τ / (2 sin(θ/2)) with θ the turn (180° − the corner's interior angle... here
+    // the direction turns by `deg`).
+    EXPECT_NEAR(j.vg_mm_s, 2.0 / (2 * std::sin(deg * kPi / 360)), 1e-6);
+    EXPECT_LE(j.speed_mm_s, j.vg_mm_s * 1.005);
+    EXPECT_GE(j.speed_mm_s, j.vg_mm_s * 0.5);  // passed, not stopped
+    EXPECT_LE(rep.max_normal_accel_mm_s2, m.max_accel_mm_s2 * 1.005);
+  }
+}
+
+TEST(AccelLimited, ZigZagHelicesAndLateBlocks) {
+  const MachineConfig m = test_machine();
+  Prog z;
+  for (int i = 0; i < 40; ++i) {
+    z.line_to(Vec3{i % 2 == 0 ? 5.0 : 0.0, i * 0.5, 0}, 10000);
+    z.line_to(Vec3{i % 2 == 0 ? 5.0 : 0.0, (i + 1) * 0.5, 0}, 10000);
+  }
+  run_checked(m, z);
+  Prog h;
+  h.line_to(Vec3{5, 0, 0}, 8000);
+  h.arc_to(Vec3{-5, 0, -3}, Vec3{0, 0, 0}, 8000);
+  h.arc_to(Vec3{-5, 0, -13}, Vec3{0, 0, -3}, 8000, {0, 0, 1}, 2);
+  h.arc_to(Vec3{-5, 5, -18}, Vec3{-5, 0, -18}, 6000, {0, 0, -1});
+  h.line_to(Vec3{0, 0, 0}, 10000);
+  run_checked(m, h);
+  Prog c;
+  for (int i = 0; i < 200; ++i) {
+    const double a = i * 0.1;
+    c.line_to(Vec3{20 * std::cos(a), 20 * std::sin(a), 0}, 10000);
+  }
+  for (std::size_t every : {1u, 3u}) {
+    RunOpts o = accel_opts();
+    o.feed_every = every;
+    run_checked(m, c, o);
+  }
+  MachineConfig small = m;
+  small.lookahead_blocks = 3;
+  run_checked(small, seed_example());
+}
+
+TEST(AccelLimited, RapidsReachTheRapidRateAndEventsHappenInOrder) {
+  const MachineConfig m = test_machine();
+  Prog p;
+  p.rapid_to(Vec3{100, 50, 10});
+  p.aux('S', 12000, false);
+  p.aux('M', 3, true);
+  p.line_to(Vec3{100, 50, 0}, 2000);
+  p.dwell(0.25);
+  p.line_to(Vec3{150, 50, 0}, 5000);
+  p.aux('M', 8, false);
+  p.line_to(Vec3{150, 80, 0}, 5000, PathMode::kExactStop);
+  p.line_to(Vec3{120, 80, 0}, 5000);
+  p.aux('M', 5, false);
+  const RunResult r = run_checked(m, p);
+  std::string order;
+  for (const auto& s : r.samples) {
+    if (s.aux_letter != 0)
+      order += s.aux_letter + std::to_string(static_cast<int>(s.aux_value)) + " ";
+  }
+  EXPECT_EQ(order, "S12000 M3 M8 M5 ");
+  const auto rep = check(m, p.blocks, r);
+  // 15 000 mm/min = 250 mm/s (the moving average holds rapids to Amax·T·τ = 168 mm/s).
+  EXPECT_NEAR(rep.max_speed_mm_s, 250, 1e-6);
+}
+
+TEST(AccelLimited, OverrideStepsAndFeedHold) {
+  const MachineConfig m = test_machine();
+  RunOpts o = accel_opts();
+  o.override_steps = {{0.05, 200}, {0.31, 37},  {0.313, 150}, {0.5, 0},  {0.7, 120},
+                      {0.9, 10},   {0.95, 200}, {1.2, 75},    {1.4, 200}};
+  run_checked(m, corner_example(6000), o);
+  RunOpts h = accel_opts();
+  h.hold_steps = {{0.2, true}, {0.6, false}};
+  const RunResult r = run_checked(m, seed_example(10000), h);
+  // Stopped within Vmax/Amax (+2 cycles) of the hold, until the resume.
+  for (const auto& s : r.samples) {
+    if (s.t_s >= 0.2 + 10000.0 / 60 / 2000 + 0.002 && s.t_s < 0.6) {
+      ASSERT_EQ(s.feed_mm_min, 0.0) << "t " << s.t_s;
+    }
+  }
+}
+
+TEST(AccelLimited, PerAxisLimitsAndRotaryAxes) {
+  MachineConfig m = test_machine();
+  m.axes[kY].max_speed_mm_min = 3000;
+  m.axes[kY].max_accel_mm_s2 = 500;
+  m.axes[kZ].max_accel_mm_s2 = 300;
+  Prog p;
+  p.line_to(Vec3{30, 30, 0}, 10000);
+  p.line_to(Vec3{60, 0, -5}, 10000);
+  p.arc_to(Vec3{60, 20, -5}, Vec3{60, 10, -5}, 10000);
+  p.line_to(Vec3{0, 0, 0}, 10000);
+  const RunResult r = run_checked(m, p);
+  const auto rep = check(m, p.blocks, r);
+  EXPECT_LE(rep.max_axis_accel_mm_s2[kY], 500 * 1.005);
+
+  MachineConfig ma = test_machine();
+  ma.axes[kA].enabled = true;
+  ma.axes[kA].rotary = true;
+  ma.axes[kA].max_speed_mm_min = 3600;
+  ma.axes[kA].max_accel_mm_s2 = 720;
+  Prog q;
+  AxisVec a;
+  a.set_xyz(Vec3{20, 0, 0});
+  a[kA] = 90;
+  q.line_to(a, 10000);
+  a[kA] = 0;
+  q.line_to(a, 3000);
+  run_checked(ma, q);
+}
+
+// Axis limits equal to Amax (the built-in machine): on arcs the normal and tangential
+// accelerations share the axes; with the resultant option the path resultant is bounded.
+TEST(AccelLimited, ArcsWithCoupledAxisLimitsAndResultant) {
+  MachineConfig m = test_machine();
+  for (std::size_t i = 0; i < 3; ++i) m.axes[i].max_accel_mm_s2 = m.max_accel_mm_s2;
+  Prog p;
+  p.line_to(Vec3{20, 0, 0}, 10000);
+  p.arc_to(Vec3{20, 20, 0}, Vec3{20, 10, 0}, 10000);
+  p.arc_to(Vec3{20, 22, 0}, Vec3{20, 21, 0}, 10000, {0, 0, -1});
+  p.line_to(Vec3{0, 22, 0}, 10000);
+  run_checked(m, p);
+  RunOpts o = accel_opts();
+  o.kernel.bound_resultant_accel = true;
+  const RunResult r = run(m, p.blocks, o);
+  testing::Limits lim = testing::limits_from_config(m);
+  lim.max_resultant_accel_mm_s2 = m.max_accel_mm_s2;
+  const auto rep = testing::check_trajectory(r.traj, p.blocks, lim);
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+}
+
+// P6: much faster than stop mode on tiny segments; and not slower than the moving average.
+TEST(AccelLimited, FasterThanStopModeAndMovingAverage) {
+  const MachineConfig m = test_machine();
+  Prog p;
+  for (int i = 1; i <= 2000; ++i) {
+    const double a = i * 0.05 / 20;
+    p.line_to(Vec3{20 * std::sin(a), 20 - 20 * std::cos(a), 0}, 10000);
+  }
+  RunOpts ma;
+  RunOpts stop;
+  stop.kernel.mode = Mode::kStop;
+  const RunResult acc = run_checked(m, p);
+  const RunResult r_ma = run(m, p.blocks, ma);
+  const RunResult r_stop = run(m, p.blocks, stop);
+  EXPECT_LT(acc.time_s(), r_ma.time_s());
+  EXPECT_LT(acc.time_s() * 50, r_stop.time_s());
+  std::printf("2000 chords of 0.05 mm: acceleration %.3f s, moving average %.3f s, stop %.3f s\n",
+              acc.time_s(), r_ma.time_s(), r_stop.time_s());
+}
+
+// P5 on random programs with random override steps: the generator of kernel_test.cpp, this type.
+RC_GTEST_PROP(AccelLimited, RandomProgramsWithOverrideSteps, ()) {
+  MachineConfig m = test_machine();
+  m.lookahead_blocks = *rc::gen::inRange(4, 40);
+  Prog p;
+  const int n = *rc::gen::inRange(1, 14);
+  for (int i = 0; i < n; ++i) {
+    const int kind = *rc::gen::inRange(0, 10);
+    const double scale = *rc::gen::element(1e-3, 0.05, 0.5, 5.0, 30.0);
+    const double dx = scale * (*rc::gen::inRange(-1000, 1001)) / 1000.0;
+    const double dy = scale * (*rc::gen::inRange(-1000, 1001)) / 1000.0;
+    const double dz = scale * (*rc::gen::inRange(-300, 301)) / 1000.0;
+    const double feed = *rc::gen::element(500.0, 3000.0, 8000.0, 10000.0, 20000.0);
+    const Vec3 at = p.pos.xyz();
+    const Vec3 to = at + Vec3{dx, dy, dz};
+    if (kind < 5) {
+      p.line_to(to, feed,
+                *rc::gen::element(PathMode::kBlend, PathMode::kBlend, PathMode::kExactStop,
+                                  PathMode::kExactPath));
+    } else if (kind < 6) {
+      p.rapid_to(to);
+    } else {
+      // Arc or helix about a random centre in a random principal plane.
+      const Vec3 normal =
+          *rc::gen::element(Vec3{0, 0, 1}, Vec3{0, 0, -1}, Vec3{0, 1, 0}, Vec3{-1, 0, 0});
+      const double r = std::max(0.05, scale * (0.1 + (*rc::gen::inRange(0, 1000)) / 1000.0));
+      // Centre offset perpendicular to the normal.
+      const Vec3 off =
+          normal.z != 0 ? Vec3{r, 0, 0} : (normal.y != 0 ? Vec3{0, 0, r} : Vec3{0, r, 0});
+      const Vec3 centre = at + off;
+      const double ang = (*rc::gen::inRange(1, 700)) / 100.0;
+      // End point: rotate (at − centre) about the normal by ang, plus a rise along it.
+      const Vec3 v = at - centre;
+      const Vec3 w = cross(normal, v);
+      const double rise = *rc::gen::element(0.0, 0.0, dz);
+      const Vec3 end = centre + std::cos(ang) * v + std::sin(ang) * w + rise * normal;
+      p.arc_to(end, centre, feed, normal, *rc::gen::element(0u, 0u, 0u, 1u));
+    }
+  }
+  RunOpts o = accel_opts();
+  o.feed_every = *rc::gen::element<std::size_t>(0, 0, 1);  // sometimes late blocks
+  const int steps = *rc::gen::inRange(0, 6);
+  for (int i = 0; i < steps; ++i) {
+    o.override_steps.emplace_back((*rc::gen::inRange(0, 2000)) / 1000.0,
+                                  *rc::gen::element(0.0, 10.0, 50.0, 100.0, 150.0, 200.0));
+  }
+  std::sort(o.override_steps.begin(), o.override_steps.end());
+  if (!o.override_steps.empty()) o.override_steps.emplace_back(2.5, 100.0);  // never stuck at 0
+  const RunResult r = run(m, p.blocks, o);
+  const auto rep = check(m, p.blocks, r);
+  if (!rep.ok()) {
+    RC_LOG() << rep.summary() << " feed_every " << o.feed_every << " buffer " << m.lookahead_blocks
+             << "\n";
+    for (const Block& b : p.blocks) {
+      RC_LOG() << "kind " << static_cast<int>(b.kind) << " line " << b.line << " (" << b.start[0]
+               << "," << b.start[1] << "," << b.start[2] << ") -> (" << b.end[0] << "," << b.end[1]
+               << "," << b.end[2] << ") c (" << b.center.x << "," << b.center.y << "," << b.center.z
+               << ") n (" << b.normal.x << "," << b.normal.y << "," << b.normal.z << ") turns "
+               << b.turns << " F " << b.feed_mm_min << " mode " << static_cast<int>(b.path_mode)
+               << "\n";
+    }
+    for (const auto& [t, pct] : o.override_steps)
+      RC_LOG() << "override " << t << " " << pct << "\n";
+  }
+  RC_ASSERT(rep.ok());
+  RC_ASSERT(r.mismatches == 0u);
+  for (std::size_t i = 0; i < 3; ++i)
+    RC_ASSERT(std::abs(r.samples.back().position[i] - p.pos[i]) <= 1e-9);
+  RC_ASSERT(r.samples.back().feed_mm_min == 0.0);
+}
+
+}  // namespace
+}  // namespace cncore::motion::test
