@@ -105,7 +105,7 @@ int main(int argc, char** argv) {
               (wall_cut - wall_plain) / static_cast<double>(timed.n) * 1e6);
   std::printf("removed          %.0f mm3, peak MRR %.0f mm3/s\n", s.removed_mm3, s.peak_mrr_mm3_s);
   std::printf("load             peak %.1f %%, mean while cutting %.1f %%\n", s.peak_load_pct,
-              s.mean_load_pct());
+              s.mean_cutting_load_pct());
   if (!png.empty()) {
     std::ofstream(png, std::ios::binary) << cut::heightmap_png(cutting.map());
     std::printf("png              %s\n", png.c_str());

@@ -96,7 +96,7 @@ TEST(CuttingSim, SlotThroughTheKernelRemovesWidthTimesDepthTimesLengthAndLoadFol
   EXPECT_NEAR(load, 100 * 140.0 / 5500, 1e-9);
   EXPECT_NEAR(per.lines[5].load[per.lines[5].load.size() / 2], load, load * 0.02);
   EXPECT_NEAR(cut.stats().peak_load_pct, load, load * 0.05);
-  EXPECT_NEAR(cut.stats().mean_load_pct(), load, load * 0.15);
+  EXPECT_NEAR(cut.stats().mean_cutting_load_pct(), load, load * 0.15);
   // No load while the tool moves in the air.
   EXPECT_EQ(per.lines[3].removed_mm3, 0);
 }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 
 #include "core/error.hpp"
@@ -126,6 +127,53 @@ void CuttingStage::on_sample(const motion::Sample& sample) {
 void CuttingStage::on_finish() {
   sim_->on_finish();
   for (sim::SampleObserver* o : downstream_) o->on_finish();
+}
+
+namespace {
+
+const char* shape_name(ToolShape s) {
+  return s == ToolShape::kFlat ? "flat" : s == ToolShape::kBall ? "ball" : "bull";
+}
+
+}  // namespace
+
+std::string summary_json_with_cutting(const std::string& summary_json, const CuttingSimulator& sim,
+                                      const CuttingConfig& config) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::parse(summary_json);
+  const CuttingStats& s = sim.stats();
+  nlohmann::ordered_json c;
+  c["removed_mm3"] = s.removed_mm3;
+  c["peak_mrr_mm3_s"] = s.peak_mrr_mm3_s;
+  c["peak_load_pct"] = s.peak_load_pct;
+  c["mean_load_pct"] = s.mean_load_pct();
+  c["mean_cutting_load_pct"] = s.mean_cutting_load_pct();
+  c["cutting_time_s"] = static_cast<double>(s.cutting_cycles) * sim.period_s();
+  c["material"] = config.kc_n_mm2 > 0 ? std::string("kc_n_mm2") : config.material;
+  c["kc_n_mm2"] = sim.kc_n_mm2();
+  c["spindle_power_kw"] = config.spindle_power_kw;
+  c["tool_changes"] = s.tool_changes;
+  c["final_tool"] = sim.tool().number;
+  c["cell_mm"] = sim.map().cell_mm();
+  c["cells"] = {sim.map().nx(), sim.map().ny()};
+  j["cutting"] = c;
+  return j.dump(2) + "\n";
+}
+
+std::string format_cutting_summary(const CuttingSimulator& sim, const CuttingConfig& config) {
+  const CuttingStats& s = sim.stats();
+  std::string o;
+  o += fmt::format("cutting       removed {:.0f} mm³, peak MRR {:.0f} mm³/s, cutting {:.3f} s\n",
+                   s.removed_mm3, s.peak_mrr_mm3_s,
+                   static_cast<double>(s.cutting_cycles) * sim.period_s());
+  o += fmt::format(
+      "cut load      peak {:.1f} %, mean {:.1f} % (while cutting {:.1f} %); kc {:g} N/mm² ({}), "
+      "spindle {:g} kW\n",
+      s.peak_load_pct, s.mean_load_pct(), s.mean_cutting_load_pct(), sim.kc_n_mm2(),
+      config.kc_n_mm2 > 0 ? "cutting.kc_n_mm2" : config.material, config.spindle_power_kw);
+  o += fmt::format("stock         {} x {} cells of {:g} mm; tool at the end T{} ({} Ø{:g})\n",
+                   sim.map().nx(), sim.map().ny(), sim.map().cell_mm(), sim.tool().number,
+                   shape_name(sim.tool().shape), sim.tool().diameter_mm);
+  return o;
 }
 
 std::string heightmap_png(const HeightMap& map) {

@@ -24,8 +24,12 @@ struct CuttingStats {
   std::uint64_t cutting_cycles = 0;  // cycles with load > 0
   std::uint64_t cycles = 0;
   std::uint32_t tool_changes = 0;
-  // Mean load while cutting (cycles with load > 0), %.
+  // Mean load over every cycle of the run (air time included), %.
   double mean_load_pct() const {
+    return cycles > 0 ? load_sum_pct / static_cast<double>(cycles) : 0;
+  }
+  // Mean load while cutting (cycles with load > 0), %.
+  double mean_cutting_load_pct() const {
     return cutting_cycles > 0 ? load_sum_pct / static_cast<double>(cutting_cycles) : 0;
   }
 };
@@ -55,6 +59,7 @@ class CuttingSimulator final : public sim::SampleObserver, public feed::LoadSour
   HeightMap& map() { return map_; }
   const ToolSpec& tool() const { return tool_; }
   double kc_n_mm2() const { return kc_n_mm2_; }
+  double period_s() const { return period_s_; }
 
   // load % = 100 · P / P_rated, P = kc · MRR (N/mm² · mm³/s = mW … so W = kc·MRR/1000).
   static double load_from_mrr(double mrr_mm3_s, double kc_n_mm2, double power_kw) {
@@ -98,6 +103,13 @@ class CuttingStage final : public sim::SampleObserver {
   CuttingSimulator* sim_;
   std::vector<sim::SampleObserver*> downstream_;
 };
+
+// The summary JSON (io::summary_to_json's text) with a "cutting" object added: removed volume,
+// peak MRR, peak and mean load (over the run and while cutting), material, kc, spindle power.
+std::string summary_json_with_cutting(const std::string& summary_json, const CuttingSimulator& sim,
+                                      const CuttingConfig& config);
+// Lines for the human summary (each ends with a newline).
+std::string format_cutting_summary(const CuttingSimulator& sim, const CuttingConfig& config);
 
 // Outputs of the final map. PNG: a top view (north = +Y up), colour by height from the stock
 // bottom (dark blue) to the top (light), with hill shading from the north-west. Grid: CSV
