@@ -178,11 +178,31 @@ struct RunArgs {
   std::string program, machine, trajectory, summary, mode = "lookahead";
   std::optional<double> override_pct;
   std::vector<std::string> override_at, vars, params;
+  std::string correction;  // --correction on|off; empty: [direction_correction] enabled
   std::string report;  // --report FILE.html
 };
 
+// The machine with `--correction on|off` applied over [direction_correction] enabled (spec 03).
+MachineConfig with_correction_option(MachineConfig m, const std::string& option) {
+  if (!option.empty()) m.direction_correction.enabled = option == "on";
+  return m;
+}
+
+// Spec 03: cycle time of the same program with the direction correction off (a second run with
+// no outputs), for the time the correction added or saved.
+double cycle_time_without_correction_s(const std::string& program, MachineConfig machine,
+                                       const sim::RunOptions& options) {
+  machine.direction_correction.enabled = false;
+  struct LastTime : sim::SampleObserver {
+    double t_s = 0;
+    void on_sample(const motion::Sample& s) override { t_s = s.t_s; }
+  } last;
+  sim::run_program(program, machine, options, {&last});
+  return last.t_s;
+}
+
 int command_run(const RunArgs& a) {
-  const MachineConfig machine = machine_from(a.machine);
+  const MachineConfig machine = with_correction_option(machine_from(a.machine), a.correction);
   sim::RunOptions options;
   options.kernel.mode = a.mode == "stop" ? motion::Mode::kStop : motion::Mode::kLookahead;
   options.kernel.bound_resultant_accel = machine.bound_resultant_accel;
@@ -213,6 +233,7 @@ int command_run(const RunArgs& a) {
   if (!a.trajectory.empty()) {
     io::TrajectoryColumns cols;
     cols.override_pct = a.override_pct.has_value() || !options.override_steps.empty();
+    cols.correction = machine.direction_correction.enabled;
     csv.emplace(a.trajectory, machine, cols);
   }
   std::optional<io::AtomicOutputFile> json;
@@ -230,6 +251,10 @@ int command_run(const RunArgs& a) {
   if (csv) observers.push_back(&*csv);
   if (report) observers.push_back(&*report);
   sim::run_program(a.program, machine, options, observers);
+  if (machine.direction_correction.enabled) {
+    summary.set_time_without_correction_s(
+        cycle_time_without_correction_s(a.program, machine, options));
+  }
 
   if (json) json->write(io::summary_to_json(summary.summary(), machine));
   if (html)
@@ -543,6 +568,11 @@ int main_cli(int argc, char** argv) {
   run->add_option("--report", ra.report,
                   "Write a self-contained HTML page: speed, acceleration, top view, slowest lines")
       ->type_name("FILE.html");
+  run->add_option("--correction", ra.correction,
+                  "Feed correction by direction of motion (spec 03): on or off (default: "
+                  "[direction_correction] enabled of the machine; M160 / M161 switch it)")
+      ->check(CLI::IsMember({"on", "off"}))
+      ->type_name("on|off");
   run->add_option("--mode", ra.mode, "lookahead (default) or stop (stop at every block)")
       ->check(CLI::IsMember({"lookahead", "stop"}))
       ->type_name("MODE");

@@ -135,6 +135,11 @@ void SummaryObserver::on_sample(const motion::Sample& s) {
   ++summary_.cycles;
   summary_.cycle_time_s = s.t_s;
   travel_check(s);
+  if (!std::isnan(s.correction)) {
+    // NaN compares false: the first coefficient seen initialises both.
+    if (!(s.correction >= summary_.correction_min)) summary_.correction_min = s.correction;
+    if (!(s.correction <= summary_.correction_max)) summary_.correction_max = s.correction;
+  }
   if (record_sample_events_ && s.aux_letter != 0) {
     add_event({s.t_s, s.line, s.aux_letter, s.aux_value});
   }
@@ -275,6 +280,18 @@ std::string summary_to_json(const Summary& s, const MachineConfig& machine) {
   j["max_axis_speed_mm_min"] = speed;
   j["max_contour_error_mm"] = s.max_contour_error_mm;
   j["max_servo_lag_mm"] = s.max_servo_lag_mm;
+  if (!std::isnan(s.correction_min) || !std::isnan(s.time_without_correction_s)) {
+    // Spec 03: time added (> 0) or saved (< 0) by the direction correction, against a second
+    // run of the same program without it.
+    nlohmann::ordered_json dc;
+    dc["c_min"] = std::isnan(s.correction_min) ? 1.0 : s.correction_min;
+    dc["c_max"] = std::isnan(s.correction_max) ? 1.0 : s.correction_max;
+    if (!std::isnan(s.time_without_correction_s)) {
+      dc["cycle_time_without_s"] = s.time_without_correction_s;
+      dc["time_added_s"] = s.cycle_time_s - s.time_without_correction_s;
+    }
+    j["direction_correction"] = dc;
+  }
   j["mode"] = s.mode;
   j["cycles"] = s.cycles;
   j["period_s"] = machine.period_s;
@@ -332,6 +349,13 @@ std::string format_human_summary(const Summary& s, const MachineConfig& machine,
   o += fmt::format("axis accel    {} (mm/s² or deg/s²)\n", axes);
   o += fmt::format("contour error {:.4f} mm (tolerance {} mm)\n", s.max_contour_error_mm,
                    machine.contour_tolerance_mm);
+  if (!std::isnan(s.time_without_correction_s)) {
+    const double added = s.cycle_time_s - s.time_without_correction_s;
+    o += fmt::format("correction    C {:.3f} … {:.3f}; {} {:.3f} s against {:.3f} s without it\n",
+                     std::isnan(s.correction_min) ? 1.0 : s.correction_min,
+                     std::isnan(s.correction_max) ? 1.0 : s.correction_max,
+                     added >= 0 ? "added" : "saved", std::abs(added), s.time_without_correction_s);
+  }
   if (s.slowest.empty()) {
     o += "slowest spots none (the programmed feed is kept everywhere)\n";
   } else {

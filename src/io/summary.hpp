@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,11 @@ struct Summary {
   std::array<double, kMaxAxes> max_axis_accel_mm_s2{};  // max |Δ²p|/Δt² per axis
   double max_contour_error_mm = 0;  // servo set-point to programmed path (see summary.cpp)
   double max_servo_lag_mm = 0;      // servo set-point to the same cycle's on-path point
+  // Direction feed correction (spec 03): range of the coefficient C over the run (NaN: not
+  // active), and the cycle time of the same program without it (a second run; NaN: not run).
+  double correction_min = std::numeric_limits<double>::quiet_NaN();
+  double correction_max = std::numeric_limits<double>::quiet_NaN();
+  double time_without_correction_s = std::numeric_limits<double>::quiet_NaN();
   std::string mode;
   std::vector<std::string> warnings;
   std::vector<SlowSpot> slowest;                      // worst first, at most 5
@@ -59,6 +65,8 @@ struct Summary {
 class SummaryObserver : public sim::SampleObserver {
  public:
   SummaryObserver(const MachineConfig& machine, std::string mode);
+  // Spec 03: the cycle time of the same program with the direction correction off.
+  void set_time_without_correction_s(double t_s) { summary_.time_without_correction_s = t_s; }
 
   void on_block(const Block& block) override;
   void on_sample(const motion::Sample& sample) override;
