@@ -7,7 +7,8 @@ CNCORE := $(BUILD)/src/app/cncore
 
 DEB_PACKAGES := cmake ninja-build g++ make pkg-config \
   libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev libfast-float-dev \
-  libmuparser-dev libgtest-dev libgmock-dev libbenchmark-dev librapidcheck-dev libpng-dev time
+  libmuparser-dev libgtest-dev libgmock-dev libbenchmark-dev librapidcheck-dev libpng-dev time \
+  nodejs npm chromium
 
 .PHONY: all deps configure build test demo bench format clean fuzz test-sanitize
 

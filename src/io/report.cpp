@@ -326,6 +326,8 @@ void ReportObserver::on_sample(const motion::Sample& s) {
     group_.spot.line = s.line;
     group_.spot.min_speed_mm_min = INFINITY;
     group_.t_start_s = prev_t_ - dt;
+    group_.first_speed_mm_min = -1;
+    group_.last_speed_mm_min = 0;
   }
   const Pending* b = s.line != 0 ? current_block(s.line) : nullptr;
   const double feed = b ? b->feed_mm_min : 0;
@@ -352,6 +354,8 @@ void ReportObserver::on_sample(const motion::Sample& s) {
     ReportSlowSpot& g = group_.spot;
     g.time_s += dt;
     g.length_mm += len;
+    if (group_.first_speed_mm_min < 0) group_.first_speed_mm_min = speed_mm_min;
+    group_.last_speed_mm_min = speed_mm_min;
     if (target > 0 && speed_mm_min < target) g.lost_s += dt * (1 - speed_mm_min / target);
     // The slowest cycle of the visit, measured against what was asked there.
     const double ratio = target > 0 ? speed_mm_min / target : 1;
@@ -377,11 +381,10 @@ void ReportObserver::on_sample(const motion::Sample& s) {
 //  brake over L/2: v² = 2·A·L/2);
 //  a corner or a stop is found where the minimum lies: near the start → the entry, near the
 //  end → the exit.
-std::string ReportObserver::explain(const ReportSlowSpot& s, const Pending* b,
-                                    double fraction) const {
+std::string ReportObserver::explain(const ReportSlowSpot& s, const Pending* b, double fraction,
+                                    bool start_stopped, bool end_stopped) const {
   std::vector<std::string> why;
   const double a = machine_.max_accel_mm_s2;
-  const double v = s.min_speed_mm_min;
   const double f = b ? std::min(b->feed_mm_min, b->cap_mm_min) : s.target_mm_min;
   if (s.override_pct < 99.95) why.push_back(fmt::format("feed override {:.0f} %", s.override_pct));
   if (!std::isnan(s.correction) && s.correction < 0.999) {
@@ -393,18 +396,26 @@ std::string ReportObserver::explain(const ReportSlowSpot& s, const Pending* b,
         fmt::format("cutting load {:.0f} % (target {:.0f} %)", s.load_pct, s.load_target_pct));
   }
   if (b != nullptr) {
-    const bool near_start = fraction <= 0.35, near_end = fraction >= 0.65;
-    const bool stopped = v < 0.02 * std::max(f, 1.0);
-    if (near_end && b->stop_after) {
-      why.emplace_back(b->has_successor ? b->stop_reason : "stop at the end of the program");
-    } else if (near_start && b->stop_before && stopped) {
-      why.push_back("start from standstill");
+    // The entry and the exit of the block: each counts when the minimum lies there or the
+    // line starts / ends at standstill; the one nearer the minimum is named first.
+    std::vector<std::string> entry, exit;
+    if (fraction <= 0.35 || start_stopped) {
+      if (b->stop_before && start_stopped) {
+        entry.emplace_back("start from standstill");
+      } else if (b->entry_corner_deg >= 1) {
+        entry.push_back(fmt::format("corner {:.0f}° from the previous line", b->entry_corner_deg));
+      }
     }
-    if (near_end && b->exit_corner_deg >= 1) {
-      why.push_back(fmt::format("corner {:.0f}° into the next line", b->exit_corner_deg));
-    } else if (near_start && b->entry_corner_deg >= 1) {
-      why.push_back(fmt::format("corner {:.0f}° from the previous line", b->entry_corner_deg));
+    if (fraction >= 0.65 || end_stopped) {
+      if (b->stop_after && end_stopped) {
+        exit.emplace_back(b->has_successor ? b->stop_reason : "stop at the end of the program");
+      } else if (b->exit_corner_deg >= 1) {
+        exit.push_back(fmt::format("corner {:.0f}° into the next line", b->exit_corner_deg));
+      }
     }
+    if (fraction >= 0.5) std::swap(entry, exit);
+    why.insert(why.end(), entry.begin(), entry.end());
+    why.insert(why.end(), exit.begin(), exit.end());
     if (b->kind == BlockKind::kArc && b->radius_mm > 0) {
       const double cap = std::sqrt(a * b->radius_mm) * 60;
       if (cap < 0.99 * f) {
@@ -435,6 +446,10 @@ void ReportObserver::close_group() {
       !pending_.empty() && pending_.front().line == g.line ? &pending_.front() : nullptr;
   const double span = prev_t_ - group_.t_start_s;
   const double fraction = span > 0 ? (g.t_min_s - group_.t_start_s) / span : 0;
+  // At standstill: below 2 % of the asked speed.
+  const double still = 0.02 * std::max(g.target_mm_min, 1.0);
+  const bool start_stopped = group_.first_speed_mm_min < still;
+  const bool end_stopped = group_.last_speed_mm_min < still;
   g.visits = 1;
   auto same = std::find_if(top_.begin(), top_.end(),
                            [&](const ReportSlowSpot& s) { return s.line == g.line; });
@@ -443,7 +458,7 @@ void ReportObserver::close_group() {
     const double r_old = same->target_mm_min > 0 ? same->min_speed_mm_min / same->target_mm_min : 1;
     const double r_new = g.target_mm_min > 0 ? g.min_speed_mm_min / g.target_mm_min : 1;
     ReportSlowSpot merged = r_new < r_old ? g : *same;
-    if (r_new < r_old) merged.why = explain(g, b, fraction);
+    if (r_new < r_old) merged.why = explain(g, b, fraction, start_stopped, end_stopped);
     merged.lost_s = same->lost_s + g.lost_s;
     merged.time_s = same->time_s + g.time_s;
     merged.length_mm = same->length_mm + g.length_mm;
@@ -452,7 +467,7 @@ void ReportObserver::close_group() {
     return;
   }
   if (g.lost_s <= 0) return;
-  g.why = explain(g, b, fraction);
+  g.why = explain(g, b, fraction, start_stopped, end_stopped);
   if (top_.size() < kSlowCandidates) {
     top_.push_back(g);
     return;

@@ -103,13 +103,15 @@ class ReportObserver : public sim::SampleObserver {
     ReportSlowSpot spot;
     bool active = false;
     double t_start_s = 0;
+    double first_speed_mm_min = -1, last_speed_mm_min = 0;
   };
   const Pending* current_block(std::uint32_t line);
   void add_to_bucket(const ReportBucket& b);
   void add_path_point(const ReportPathPoint& p);
   void thin_path();
   void close_group();
-  std::string explain(const ReportSlowSpot& s, const Pending* b, double fraction) const;
+  std::string explain(const ReportSlowSpot& s, const Pending* b, double fraction,
+                      bool start_stopped, bool end_stopped) const;
 
   MachineConfig machine_;
   std::string mode_;
