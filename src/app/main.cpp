@@ -20,6 +20,7 @@
 
 #include "config/machine_config.hpp"
 #include "core/error.hpp"
+#include "feedcontrol/adaptive_run.hpp"
 #include "interpreter/interpreter.hpp"
 #include "io/atomic_file.hpp"
 #include "io/report.hpp"
@@ -179,7 +180,9 @@ struct RunArgs {
   std::optional<double> override_pct;
   std::vector<std::string> override_at, vars, params;
   std::string correction;  // --correction on|off; empty: [direction_correction] enabled
-  std::string report;  // --report FILE.html
+  std::string report;    // --report FILE.html
+  std::string adaptive;  // --adaptive on|off; empty: adaptive.enabled of the configuration
+  std::string load_csv;  // --load FILE.csv
 };
 
 // The machine with `--correction on|off` applied over [direction_correction] enabled (spec 03).
@@ -227,12 +230,30 @@ int command_run(const RunArgs& a) {
   options.interpreter = interpreter_options(a.vars, a.params);
   require_readable(a.program);
 
+  // Adaptive feed control (spec 04): runs in the loop when there is a load source.
+  const feed::SelectedLoadSource load = feed::make_load_source(machine, {a.load_csv});
+  feed::AdaptiveSettings adaptive_settings = machine.adaptive;
+  if (!a.adaptive.empty()) adaptive_settings.enabled = a.adaptive == "on";
+  if (a.adaptive == "on" && !load.source) {
+    throw UsageError(
+        "--adaptive on needs a load source: --load FILE.csv, or an [adaptive.plant] depth "
+        "profile in the machine configuration");
+  }
+  std::optional<feed::AdaptiveCycleController> adaptive;
+  if (load.source) {
+    adaptive.emplace(machine, adaptive_settings, *load.source,
+                     a.machine.empty() ? std::string("built-in machine") : a.machine);
+    options.cycle_controller = &*adaptive;
+  }
+
   // Output files are created (as temporaries) before the run, so a bad path fails at once, and
   // renamed into place only after the run succeeded.
   std::optional<io::TrajectoryCsvWriter> csv;
   if (!a.trajectory.empty()) {
     io::TrajectoryColumns cols;
     cols.override_pct = a.override_pct.has_value() || !options.override_steps.empty();
+    cols.override_pct = cols.override_pct || adaptive.has_value();
+    cols.load = cols.load_target = adaptive.has_value();
     cols.correction = machine.direction_correction.enabled;
     csv.emplace(a.trajectory, machine, cols);
   }
@@ -251,6 +272,19 @@ int command_run(const RunArgs& a) {
   if (csv) observers.push_back(&*csv);
   if (report) observers.push_back(&*report);
   sim::run_program(a.program, machine, options, observers);
+  if (adaptive) {
+    io::LoadSummary& l = summary.load_summary();
+    l.adaptive = adaptive->ever_enabled();
+    l.antiwindup = feed::antiwindup_name(adaptive_settings.antiwindup);
+    l.source = load.description;
+    l.target_load_pct = adaptive_settings.target_load_pct;
+    l.switches = adaptive->switch_count();
+    if (l.adaptive) {
+      // Time saved: the same program again with the operator's override alone (no outputs).
+      l.time_without_adaptive_s = feed::cycle_time_without_adaptive_s(a.program, machine, options);
+      l.time_saved_s = l.time_without_adaptive_s - summary.summary().cycle_time_s;
+    }
+  }
   if (machine.direction_correction.enabled) {
     summary.set_time_without_correction_s(
         cycle_time_without_correction_s(a.program, machine, options));
@@ -573,6 +607,15 @@ int main_cli(int argc, char** argv) {
                   "[direction_correction] enabled of the machine; M160 / M161 switch it)")
       ->check(CLI::IsMember({"on", "off"}))
       ->type_name("on|off");
+  run->add_option("--adaptive", ra.adaptive,
+                  "Adaptive feed control at program start: on or off (default: adaptive.enabled "
+                  "of the machine; M52 P1 / M52 P0 in the program switch it)")
+      ->check(CLI::IsMember({"on", "off"}))
+      ->type_name("on|off");
+  run->add_option("--load", ra.load_csv,
+                  "Recorded spindle load (CSV t_s,load_pct or s_mm,load_pct): the load source "
+                  "of adaptive feed control (default: [adaptive.plant] of the machine)")
+      ->type_name("FILE.csv");
   run->add_option("--mode", ra.mode, "lookahead (default) or stop (stop at every block)")
       ->check(CLI::IsMember({"lookahead", "stop"}))
       ->type_name("MODE");

@@ -13,6 +13,7 @@
 #include <optional>
 #include <sstream>
 
+#include "config/adaptive_section.hpp"
 #include "config/cutting_config_toml.hpp"
 #include "core/error.hpp"
 
@@ -510,14 +511,18 @@ MachineConfig parse_machine_config(std::string_view toml_text, const std::string
       read_axes(r, key, r.table(key, node, k), c);
     } else if (k == "direction_correction") {
       read_direction_correction(r, key, r.table(key, node, k), c, correction_at);
+    } else if (k == "adaptive") {
+      config_detail::read_adaptive_section(source_name, key, node, c);
     } else {
       r.unknown(key, k,
                 " (sections are [motion], [axes.<x|y|z|a|b|c>], [interpreter], [tables], "
-                "[direction_correction], [stock], [[tools]], [cutting])");
+                "[direction_correction], [stock], [[tools]], [cutting], [adaptive])");
     }
   }
   validate_cutting_config(source_name, c.cutting, cutting_at);
   check_direction_correction(r, correction_at, c);
+  // After every section: adaptive.upper_pct is checked against motion.max_override_pct.
+  if (root.contains("adaptive")) config_detail::check_adaptive_section(source_name, root, c);
   return c;
 }
 
@@ -633,6 +638,7 @@ std::string machine_config_to_toml(const MachineConfig& c) {
          fmt::format("position at program start, {}", u));
   }
   o += cutting_config_to_toml(c.cutting);
+  o += config_detail::adaptive_section_to_toml(c);
   return o;
 }
 

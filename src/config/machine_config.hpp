@@ -10,6 +10,7 @@
 #include "config/cutting_config.hpp"
 #include "config/correction_law.hpp"
 #include "core/geometry.hpp"
+#include "feedcontrol/settings.hpp"
 
 namespace cncore {
 
@@ -91,6 +92,11 @@ struct MachineConfig {
 
   // [stock], [[tools]], [cutting] (cutting simulation, issue 7): active when stock.enabled
   CuttingConfig cutting;
+
+  // [adaptive], [adaptive.plant] (spec 04): adaptive feed control on spindle load and its plant
+  // model (used as load source when its depth profile is not empty).
+  feed::AdaptiveSettings adaptive;
+  feed::PlantSettings adaptive_plant;
 
   friend bool operator==(const MachineConfig&, const MachineConfig&) = default;
 

@@ -515,7 +515,10 @@ void Interpreter::Impl::execute_words() {
         break;
     }
   }
-  if (const auto* m = w.mgroup(MGroup::kSubprogram)) call_fanuc(m->col);
+  // The group also holds M52 (adaptive feed, emitted at step 10): only M98 calls.
+  if (const auto* m = w.mgroup(MGroup::kSubprogram); m != nullptr && m->code10 == 980) {
+    call_fanuc(m->col);
+  }
 }
 
 AxisVec Interpreter::Impl::target_from_words(bool machine_coords) const {

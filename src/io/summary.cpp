@@ -143,6 +143,24 @@ void SummaryObserver::on_sample(const motion::Sample& s) {
   if (record_sample_events_ && s.aux_letter != 0) {
     add_event({s.t_s, s.line, s.aux_letter, s.aux_value});
   }
+  // Spindle load (spec 04): each cycle with a reading counts for the time since the previous one.
+  const double dt_s = have_previous_t_ ? s.t_s - previous_t_s_ : 0.0;
+  have_previous_t_ = true;
+  previous_t_s_ = s.t_s;
+  if (!std::isnan(s.load_pct)) {
+    LoadSummary& l = summary_.load;
+    l.present = true;
+    l.peak_load_pct = std::max(l.peak_load_pct, s.load_pct);
+    load_sum_pct_ += s.load_pct;
+    ++load_cycles_;
+    l.mean_load_pct = load_sum_pct_ / static_cast<double>(load_cycles_);
+    if (!std::isnan(s.load_target_pct) && s.load_pct > s.load_target_pct) {
+      l.time_above_target_s += dt_s;
+      if (s.load_pct > s.load_target_pct + LoadSummary::kBandPct) {
+        l.time_above_target_band_s += dt_s;
+      }
+    }
+  }
 
   // Contour error: distance from the servo set-point to the polyline of recent on-path points.
   const Vec3 path = s.path_position.xyz();
@@ -318,6 +336,22 @@ std::string summary_to_json(const Summary& s, const MachineConfig& machine) {
   }
   j["aux_events"] = events;
   j["aux_event_count"] = s.aux_event_count;
+  if (s.load.present) {
+    const LoadSummary& l = s.load;
+    nlohmann::ordered_json a;
+    a["adaptive"] = l.adaptive;
+    a["antiwindup"] = l.antiwindup;
+    a["load_source"] = l.source;
+    a["target_load_pct"] = l.target_load_pct;
+    a["time_without_adaptive_s"] = l.time_without_adaptive_s;
+    a["time_saved_s"] = l.time_saved_s;
+    a["time_above_target_s"] = l.time_above_target_s;
+    a["time_above_target_plus5_s"] = l.time_above_target_band_s;
+    a["peak_load_pct"] = l.peak_load_pct;
+    a["mean_load_pct"] = l.mean_load_pct;
+    a["m52_switches"] = l.switches;
+    j["adaptive_feed"] = a;
+  }
   return j.dump(2) + "\n";
 }
 
@@ -366,6 +400,19 @@ std::string format_human_summary(const Summary& s, const MachineConfig& machine,
                        p.programmed_feed_mm_min, p.rapid ? " (G0)" : "");
       if (p.visits > 1) o += fmt::format(" ({} passes)", p.visits);
       o += '\n';
+    }
+  }
+  if (s.load.present) {
+    const LoadSummary& l = s.load;
+    o += fmt::format("spindle load  peak {:.1f} %, mean {:.1f} %, above target {:.0f} %: {:.3f} s "
+                     "(+5 %: {:.3f} s); source: {}\n",
+                     l.peak_load_pct, l.mean_load_pct, l.target_load_pct, l.time_above_target_s,
+                     l.time_above_target_band_s, l.source);
+    if (l.adaptive) {
+      o += fmt::format("adaptive feed {} ({} M52), time saved {:.3f} s: {:.3f} s without it\n",
+                       l.antiwindup, l.switches, l.time_saved_s, l.time_without_adaptive_s);
+    } else {
+      o += "adaptive feed off (load measured only)\n";
     }
   }
   for (const std::string& w : s.warnings) o += fmt::format("warning: {}\n", w);

@@ -37,6 +37,25 @@ struct AuxEvent {
   double value = 0;
 };
 
+// Spindle load and adaptive feed control (spec 04): present when the run had a load source.
+// The observer measures the load columns; the caller fills in the rest.
+struct LoadSummary {
+  bool present = false;
+  double peak_load_pct = 0;
+  double mean_load_pct = 0;             // over every cycle of the run (air time included)
+  double time_above_target_s = 0;       // cycles with load > load_target, × period
+  double time_above_target_band_s = 0;  // load > load_target + kBandPct
+  static constexpr double kBandPct = 5;
+  // Set by the caller (cncore run):
+  bool adaptive = false;               // the controller ran (enabled at start, or by M52 P1)
+  std::string antiwindup;              // adaptive.antiwindup
+  std::string source;                  // "plant model", "recorded FILE"
+  double target_load_pct = 0;
+  double time_without_adaptive_s = 0;  // the same run again with the operator's override only
+  double time_saved_s = 0;             // time_without_adaptive_s − cycle_time_s
+  std::uint64_t switches = 0;          // M52 events
+};
+
 struct Summary {
   double cycle_time_s = 0;                // time of the last sample
   std::uint64_t blocks = 0;               // motion blocks (G0, G1, G2/G3) executed
@@ -60,6 +79,7 @@ struct Summary {
   std::vector<AuxEvent> aux_events;                   // the first kMaxAuxEvents, in order
   std::uint64_t aux_event_count = 0;                  // all of them
   static constexpr std::size_t kMaxAuxEvents = 1000;  // bounded: memory flat in program length
+  LoadSummary load;
 };
 
 class SummaryObserver : public sim::SampleObserver {
@@ -73,6 +93,8 @@ class SummaryObserver : public sim::SampleObserver {
   void on_finish() override;
 
   const Summary& summary() const { return summary_; }
+  // The load part, for the caller to fill in what it knows (adaptive control, time saved).
+  LoadSummary& load_summary() { return summary_.load; }
   // Records an auxiliary event. on_sample records the sample's own event unless the caller
   // delivers events itself (a table cycle can fire several M codes; a sample carries one).
   void add_event(const AuxEvent& event);
@@ -109,6 +131,10 @@ class SummaryObserver : public sim::SampleObserver {
   std::vector<SlowSpot> top_;  // bounded candidate set, merged by line
   std::array<bool, kMaxAxes> travel_warned_{};
   bool record_sample_events_ = true;
+  double load_sum_pct_ = 0;  // Σ load over the cycles with a reading
+  std::uint64_t load_cycles_ = 0;
+  bool have_previous_t_ = false;
+  double previous_t_s_ = 0;
 };
 
 // Spec 05 summary JSON (plus extra keys: max_path_accel_mm_s2, max_axis_speed_mm_min,

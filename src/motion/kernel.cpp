@@ -106,6 +106,7 @@ struct Kernel::Impl {
         ev.barrier = b.aux_waits;
         ev.aux_letter = b.aux_letter;
         ev.aux_value = b.aux_value;
+        ev.aux_p = b.aux_p;
         push_event(ev);
         return;
       default:
@@ -197,6 +198,7 @@ struct Kernel::Impl {
           if (out.aux_letter != 0) return;  // one event per sample; the next one next cycle
           out.aux_letter = it.aux_letter;
           out.aux_value = it.aux_value;
+          out.aux_p = it.aux_p;
         }
         it.done = true;
         if (it.barrier) {

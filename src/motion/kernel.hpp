@@ -52,6 +52,7 @@ struct Sample {
   // Auxiliary event (M/S/T) reached in this cycle, kind kAux; aux_letter == 0 when none.
   char aux_letter = 0;
   double aux_value = 0;
+  double aux_p = 0;  // its P word (M52 P1 / P0), see Block::aux_p
 };
 
 class Kernel {

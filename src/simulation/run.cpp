@@ -54,11 +54,14 @@ RunCounts run_program(const std::string& program_path, const MachineConfig& mach
   auto step = [&]() -> bool {
     const double t_next = static_cast<double>(counts.cycles) * machine.period_s;
     while (next_step < steps.size() && t_next >= steps[next_step].first - 1e-9) {
-      kernel.set_override(steps[next_step].second);
+      if (options.cycle_controller == nullptr) kernel.set_override(steps[next_step].second);
       override_now = steps[next_step].second;
       ++next_step;
     }
     if (!kernel.step(sample)) return false;
+    if (options.cycle_controller != nullptr) {
+      kernel.set_override(options.cycle_controller->on_cycle(sample, override_now));
+    }
     deliver(sample);
     return true;
   };

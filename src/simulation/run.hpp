@@ -23,11 +23,25 @@ class SampleObserver {
   virtual void on_finish() {}
 };
 
+// Sets the feed override every interpolation cycle from what the cycle measured (adaptive feed
+// control, spec 04). Called after each Kernel::step(), before the observers see the sample: it
+// may fill the sample's optional channels (load, load target). Real-time: no allocation.
+class CycleController {
+ public:
+  virtual ~CycleController() = default;
+  // operator_override_pct: the operator's override in force (--override, --override-at).
+  // Returns the override (%) the kernel runs from the next cycle.
+  virtual double on_cycle(motion::Sample& sample, double operator_override_pct) noexcept = 0;
+};
+
 struct RunOptions {
   motion::KernelOptions kernel;
   interp::Options interpreter;
   // Feed-override steps (time in s, override in %), applied at the first cycle with t >= time.
   std::vector<std::pair<double, double>> override_steps;
+  // When set, it decides the kernel's override every cycle; the override steps then only set
+  // the operator's override it is given. Not owned.
+  CycleController* cycle_controller = nullptr;
 };
 
 struct RunCounts {
