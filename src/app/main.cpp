@@ -26,6 +26,7 @@
 #include "io/report.hpp"
 #include "io/summary.hpp"
 #include "io/trajectory_csv.hpp"
+#include "simulation/cutting/cutting_controller.hpp"
 #include "simulation/run.hpp"
 #include "simulation/stepper.hpp"
 #include "tables/table.hpp"
@@ -183,6 +184,7 @@ struct RunArgs {
   std::string report;    // --report FILE.html
   std::string adaptive;  // --adaptive on|off; empty: adaptive.enabled of the configuration
   std::string load_csv;  // --load FILE.csv
+  std::string heightmap, heightmap_grid;  // cutting simulation: --heightmap, --heightmap-grid
 };
 
 // The machine with `--correction on|off` applied over [direction_correction] enabled (spec 03).
@@ -232,18 +234,39 @@ int command_run(const RunArgs& a) {
 
   // Adaptive feed control (spec 04): runs in the loop when there is a load source.
   const feed::SelectedLoadSource load = feed::make_load_source(machine, {a.load_csv});
+  // Cutting simulation (issue 7): on with a [stock] section. It is the load source of adaptive
+  // control unless --load names a recorded signal.
+  std::optional<cut::CuttingSimulator> cutting;
+  if (machine.cutting.stock.enabled) {
+    cutting.emplace(machine, a.program);
+  } else if (!a.heightmap.empty() || !a.heightmap_grid.empty()) {
+    throw UsageError("--heightmap and --heightmap-grid need a [stock] section in the machine "
+                     "configuration (docs/cutting-simulation.md)");
+  }
+  feed::LoadSource* load_source = load.source.get();
+  std::string load_description = load.description;
+  if (cutting && a.load_csv.empty()) {
+    load_source = &*cutting;
+    load_description = "cutting simulation";
+  }
   feed::AdaptiveSettings adaptive_settings = machine.adaptive;
   if (!a.adaptive.empty()) adaptive_settings.enabled = a.adaptive == "on";
-  if (a.adaptive == "on" && !load.source) {
+  if (a.adaptive == "on" && load_source == nullptr) {
     throw UsageError(
         "--adaptive on needs a load source: --load FILE.csv, or an [adaptive.plant] depth "
         "profile in the machine configuration");
   }
   std::optional<feed::AdaptiveCycleController> adaptive;
-  if (load.source) {
-    adaptive.emplace(machine, adaptive_settings, *load.source,
+  if (load_source != nullptr) {
+    adaptive.emplace(machine, adaptive_settings, *load_source,
                      a.machine.empty() ? std::string("built-in machine") : a.machine);
     options.cycle_controller = &*adaptive;
+  }
+  // The simulator sweeps first each cycle, then hands the sample to the adaptive controller.
+  std::optional<cut::CuttingCycleController> cutting_stage;
+  if (cutting) {
+    cutting_stage.emplace(*cutting, adaptive ? &*adaptive : nullptr);
+    options.cycle_controller = &*cutting_stage;
   }
 
   // Output files are created (as temporaries) before the run, so a bad path fails at once, and
@@ -253,12 +276,16 @@ int command_run(const RunArgs& a) {
     io::TrajectoryColumns cols;
     cols.override_pct = a.override_pct.has_value() || !options.override_steps.empty();
     cols.override_pct = cols.override_pct || adaptive.has_value();
-    cols.load = cols.load_target = adaptive.has_value();
+    cols.load = adaptive.has_value() || cutting.has_value();
+    cols.load_target = adaptive.has_value();
     cols.correction = machine.direction_correction.enabled;
     csv.emplace(a.trajectory, machine, cols);
   }
   std::optional<io::AtomicOutputFile> json;
   if (!a.summary.empty()) json.emplace(a.summary);
+  std::optional<io::AtomicOutputFile> heightmap_png, heightmap_grid;
+  if (!a.heightmap.empty()) heightmap_png.emplace(a.heightmap);
+  if (!a.heightmap_grid.empty()) heightmap_grid.emplace(a.heightmap_grid);
   std::optional<io::AtomicOutputFile> html;
   std::optional<io::ReportObserver> report;
   if (!a.report.empty()) {
@@ -271,12 +298,13 @@ int command_run(const RunArgs& a) {
   std::vector<sim::SampleObserver*> observers{&summary, &progress};
   if (csv) observers.push_back(&*csv);
   if (report) observers.push_back(&*report);
+  if (cutting_stage) observers.push_back(&*cutting_stage);  // checks T words against the table
   sim::run_program(a.program, machine, options, observers);
   if (adaptive) {
     io::LoadSummary& l = summary.load_summary();
     l.adaptive = adaptive->ever_enabled();
     l.antiwindup = feed::antiwindup_name(adaptive_settings.antiwindup);
-    l.source = load.description;
+    l.source = load_description;
     l.target_load_pct = adaptive_settings.target_load_pct;
     l.switches = adaptive->switch_count();
     if (l.adaptive) {
@@ -290,13 +318,28 @@ int command_run(const RunArgs& a) {
         cycle_time_without_correction_s(a.program, machine, options));
   }
 
-  if (json) json->write(io::summary_to_json(summary.summary(), machine));
+  if (json) {
+    std::string text = io::summary_to_json(summary.summary(), machine);
+    if (cutting) text = cut::summary_json_with_cutting(text, *cutting, machine.cutting);
+    json->write(text);
+  }
+  if (heightmap_png) heightmap_png->write(cut::heightmap_png(cutting->map()));
+  if (heightmap_grid) {
+    const bool csv_grid = a.heightmap_grid.size() >= 4 &&
+                          a.heightmap_grid.compare(a.heightmap_grid.size() - 4, 4, ".csv") == 0;
+    heightmap_grid->write(cut::heightmap_grid(cutting->map(), csv_grid));
+  }
   if (html)
     html->write(io::render_report_html(*report, summary.summary(), machine, {a.program, ""}));
   if (csv) csv->commit();
   if (json) json->commit();
   if (html) html->commit();
+  if (heightmap_png) heightmap_png->commit();
+  if (heightmap_grid) heightmap_grid->commit();
   std::cout << io::format_human_summary(summary.summary(), machine, a.program);
+  if (cutting) std::cout << cut::format_cutting_summary(*cutting, machine.cutting);
+  if (heightmap_png) std::cout << "heightmap     " << a.heightmap << "\n";
+  if (heightmap_grid) std::cout << "height grid   " << a.heightmap_grid << "\n";
   if (csv) std::cout << "trajectory    " << a.trajectory << "\n";
   if (json) std::cout << "summary       " << a.summary << "\n";
   if (html) std::cout << "report        " << a.report << "\n";
@@ -616,6 +659,14 @@ int main_cli(int argc, char** argv) {
                   "Recorded spindle load (CSV t_s,load_pct or s_mm,load_pct): the load source "
                   "of adaptive feed control (default: [adaptive.plant] of the machine)")
       ->type_name("FILE.csv");
+  run->add_option("--heightmap", ra.heightmap,
+                  "Cutting simulation ([stock] in the machine): write the final stock as a PNG "
+                  "top view shaded by height")
+      ->type_name("FILE.png");
+  run->add_option("--heightmap-grid", ra.heightmap_grid,
+                  "Cutting simulation: write the final height map as a grid (FILE.csv text, "
+                  "any other name binary; docs/cutting-simulation.md)")
+      ->type_name("FILE");
   run->add_option("--mode", ra.mode, "lookahead (default) or stop (stop at every block)")
       ->check(CLI::IsMember({"lookahead", "stop"}))
       ->type_name("MODE");
