@@ -37,8 +37,8 @@ test: build
 demo: build
 	@mkdir -p out
 	$(CNCORE) run examples/seed-line-arc-line.ngc --summary out/demo-summary.json \
-	  --trajectory out/demo-trajectory.csv
-	@echo "wrote out/demo-summary.json and out/demo-trajectory.csv"
+	  --trajectory out/demo-trajectory.csv --report out/demo-report.html
+	@echo "wrote out/demo-summary.json, out/demo-trajectory.csv and out/demo-report.html"
 
 bench: build
 	@bash bench/run.sh $(BUILD)
