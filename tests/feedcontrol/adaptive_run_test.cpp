@@ -371,6 +371,20 @@ TEST_F(AdaptiveRun, BadInputIsRejectedWithItsPlace) {
   EXPECT_NE(g4.err.find("P word"), std::string::npos) << g4.err;
 }
 
+TEST_F(AdaptiveRun, BundledExamplesRun) {
+  const std::string ex = std::string(CNCORE_SOURCE_DIR) + "/examples/adaptive/";
+  const Result r = run("run '" + ex + "m52.ngc' --machine '" + ex + "plant.toml' --summary s.json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(slurp(dir_ / "s.json"));
+  EXPECT_EQ(j.at("adaptive_feed").at("m52_switches"), 2);
+  EXPECT_EQ(j.at("adaptive_feed").at("load_source"), "plant model");
+  const Result rec = run("run '" + ex + "line.ngc' --load '" + ex +
+                         "load-by-distance.csv' --adaptive on --summary r.json");
+  ASSERT_EQ(rec.code, 0) << rec.err;
+  const auto jr = nlohmann::json::parse(slurp(dir_ / "r.json"));
+  EXPECT_NEAR(jr.at("adaptive_feed").at("peak_load_pct").get<double>(), 85, 1e-9);
+}
+
 TEST(AdaptiveConfig, PrintedConfigurationReadsBackEqual) {
   MachineConfig c = default_machine_config();
   c.adaptive.enabled = true;
