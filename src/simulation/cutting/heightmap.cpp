@@ -135,32 +135,53 @@ double HeightMap::sweep(const ToolProfile& tool, const Vec3& a, const Vec3& b) {
       case ToolShape::kBullNose:
         break;
     }
-    // Bull nose: golden-section search of the convex f on the feasible interval.
+    // Bull nose: f is convex, so its minimum on [tl, th] is where f' changes sign (or an end).
+    // f'(t) = dz + h'(r)·r'(t), h'(r) = (r − a)/√(rc² − (r − a)²) beyond the flat centre,
+    // r'(t) = −(w − t·d)·d / r. The root is found by the Illinois variant of regula falsi
+    // (bisection while an end value is infinite, at the footprint's rim): a few evaluations.
     if (!feasible(wx, wy, dx, dy, lxy2, r2, tl, th)) return lower_bound;
     auto f = [&](double t) {
       const double px = wx - t * dx, py = wy - t * dy;
       return a.z + t * dz + tool.height_at(std::sqrt(px * px + py * py));
     };
-    constexpr double kG = 0.6180339887498949;
+    const double flat = tool.flat_mm(), rc = tool.corner_mm;
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    auto fp = [&](double t) {
+      const double px = wx - t * dx, py = wy - t * dy;
+      const double r = std::sqrt(px * px + py * py);
+      if (r <= flat || r == 0) return dz;
+      const double rp = -(px * dx + py * dy) / r;
+      const double u = r - flat;
+      const double q = rc * rc - u * u;
+      if (q <= 0) return rp > 0 ? kInf : (rp < 0 ? -kInf : dz);
+      return dz + u / std::sqrt(q) * rp;
+    };
     double lo = tl, hi = th;
-    double m1 = hi - kG * (hi - lo), m2 = lo + kG * (hi - lo);
-    double f1 = f(m1), f2 = f(m2);
-    for (int it = 0; it < 48 && hi - lo > 1e-9; ++it) {
-      if (f1 <= f2) {
-        hi = m2;
-        m2 = m1;
-        f2 = f1;
-        m1 = hi - kG * (hi - lo);
-        f1 = f(m1);
+    double glo = fp(lo), ghi = fp(hi);
+    if (glo >= 0) return f(lo);
+    if (ghi <= 0) return f(hi);
+    double t = 0.5 * (lo + hi);
+    int side = 0;
+    for (int it = 0; it < 100; ++it) {
+      t = std::isfinite(glo) && std::isfinite(ghi) ? lo - glo * (hi - lo) / (ghi - glo)
+                                                   : 0.5 * (lo + hi);
+      if (!(t > lo && t < hi)) t = 0.5 * (lo + hi);
+      const double g = fp(t);
+      // Convexity: f(t) − min f ≤ |f'(t)|·(hi − lo); stop at 1e-9 mm.
+      if (g == 0 || std::fabs(g) * (hi - lo) < 1e-9 || hi - lo < 1e-15) break;
+      if (g < 0) {
+        lo = t;
+        glo = g;
+        if (side == -1) ghi *= 0.5;
+        side = -1;
       } else {
-        lo = m1;
-        m1 = m2;
-        f1 = f2;
-        m2 = lo + kG * (hi - lo);
-        f2 = f(m2);
+        hi = t;
+        ghi = g;
+        if (side == 1) glo *= 0.5;
+        side = 1;
       }
     }
-    return std::min({f(tl), f(th), f1, f2});
+    return f(t);
   };
 
   // h(√d2) with one square root at most (this runs for most cells under the tool).

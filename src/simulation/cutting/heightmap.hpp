@@ -39,9 +39,9 @@ class HeightMap {
   // Sweeps the tool with its tip moving on the straight segment a → b (XYZ, mm) and lowers the
   // map: each cell within R of the segment (in X-Y) gets min(its height, min over the segment
   // of the tool's bottom height at the cell centre). Exact at the cell centres for straight
-  // moves: closed form for flat and ball end mills, a convex 1-D minimisation (golden section
-  // to 1e-9 of the segment) for the bull nose. Returns the removed volume, mm³ (Σ Δh·cell²).
-  // No allocation; cost proportional to the cells under the swept footprint.
+  // moves: closed form for flat and ball end mills, a convex 1-D minimisation (root of the
+  // derivative by regula falsi, to 1e-9 mm) for the bull nose. Returns the removed volume, mm³ (Σ
+  // Δh·cell²). No allocation; cost proportional to the cells under the swept footprint.
   double sweep(const ToolProfile& tool, const Vec3& a, const Vec3& b);
 
   std::size_t nx() const { return nx_; }
