@@ -433,14 +433,12 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   // ≤ V_t: a joint cap that arrives late at a stop's position (the window's tail) then finds
   // the steps around it already within its cap (see 6.).
   if (to_stop > 0) {
+    // In real distance with the local acceleration a (the cap lies within a few steps of the
+    // stop; farther away the stop's own σ bound is the stricter one).
     const double vt = tail_cap_pc_;
-    if (to_stop <= vt) {
-      stop_limit = std::min(stop_limit, vt);
-    } else {
-      const double k = vt * vt + 2 * a0_ * (cached_stop_sigma_ - vt);
-      stop_limit =
-          std::min(stop_limit, std::sqrt(std::max(0.0, a0_ * a0_ + k - 2 * a0_ * sigma_p)) - a0_);
-    }
+    const double tail =
+        to_stop <= vt ? vt : std::sqrt(a * a + vt * vt + 2 * a * (to_stop - vt)) - a;
+    stop_limit = std::min(stop_limit, tail);
   }
 
   double u = in.hold ? step_ - a : step_ + a;
