@@ -32,12 +32,22 @@ RunCounts run_program(const std::string& program_path, const MachineConfig& mach
   // Standing still is legitimate during a dwell and while the override is 0, so the limit is
   // the longest dwell seen so far plus 60 s of simulated time.
   double override_now = options.kernel.override_pct;
+  double override_set = override_now;  // what the kernel runs (the cycle controller's output)
   double longest_dwell_s = 0;
   std::uint64_t still_cycles = 0;
   AxisVec last_position;
   auto deliver = [&](const motion::Sample& s) {
     if (counts.cycles > 0 && s.position == last_position && override_now > 0) {
       if (++still_cycles * machine.period_s > longest_dwell_s + 60) {
+        if (options.cycle_controller != nullptr && override_set <= 0) {
+          // Not a kernel fault: the controller holds the feed at 0 and its load never falls
+          // (a recorded load does not follow the feed).
+          throw InputError(program_path, s.line, 1,
+                           "adaptive feed control has held the feed override at 0 % for 60 s: "
+                           "the measured load never fell below adaptive.threshold_pct (a "
+                           "recorded load does not follow the feed); set adaptive.lower_pct "
+                           "above 0, or an antiwindup policy other than \"none\"");
+        }
         throw std::runtime_error("motion kernel stalled: no motion for " +
                                  std::to_string(still_cycles) + " cycles at line " +
                                  std::to_string(s.line) + ", t = " + std::to_string(s.t_s) + " s");
@@ -60,7 +70,8 @@ RunCounts run_program(const std::string& program_path, const MachineConfig& mach
     }
     if (!kernel.step(sample)) return false;
     if (options.cycle_controller != nullptr) {
-      kernel.set_override(options.cycle_controller->on_cycle(sample, override_now));
+      override_set = options.cycle_controller->on_cycle(sample, override_now);
+      kernel.set_override(override_set);
     }
     deliver(sample);
     return true;

@@ -355,6 +355,15 @@ TEST_F(AdaptiveRun, BadInputIsRejectedWithItsPlace) {
     EXPECT_FALSE(fs::exists(dir_ / "t.csv"));
   }
   EXPECT_EQ(run("run line.ngc --load missing.csv").code, 1);
+  // A recorded overload that never ends and no lower limit (none): the feed stops for good.
+  // An input error at the program line, not a kernel fault.
+  write(dir_ / "hi.csv", "t_s,load_pct\n0,90\n");
+  write(dir_ / "none.toml", "[adaptive]\nenabled = true\nantiwindup = \"none\"\n");
+  const Result stall = run("run line.ngc --machine none.toml --load hi.csv --trajectory t.csv");
+  EXPECT_EQ(stall.code, 1) << stall.err;
+  EXPECT_EQ(stall.err.rfind("line.ngc:1:1: error: adaptive feed control has held", 0), 0u)
+      << stall.err;
+  EXPECT_FALSE(fs::exists(dir_ / "t.csv"));
 
   // Usage: --adaptive on without a load source; a bad --adaptive value.
   EXPECT_EQ(run("run line.ngc --adaptive on").code, 2);
