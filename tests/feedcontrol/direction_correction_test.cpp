@@ -18,6 +18,7 @@
 
 #include "config/machine_config.hpp"
 #include "core/error.hpp"
+#include "io/summary.hpp"
 #include "io/trajectory_csv.hpp"
 #include "limits.hpp"
 #include "simulation/run.hpp"
@@ -318,6 +319,33 @@ TEST(DirectionCorrection, RealSurfacingProgramStaysWithinLimits) {
   const testing::CheckReport r =
       testing::check_trajectory(same, blocks, testing::limits_from_config(m));
   EXPECT_TRUE(r.ok()) << r.summary();
+}
+
+TEST(DirectionCorrection, SummaryReportsTheRangeOfCAndTheTimeAdded) {
+  // 60 mm up at 30°, 60 mm level, 60 mm down at F1000 with exact stops: at constant speed the
+  // correction changes 3 × 3.6 s into 60/1250 + 60/1000 + 60/750 min = 11.28 s (+0.48 s); the
+  // ramps at the stops are the same in both runs up to a cycle or two.
+  const std::string p = program_file("slopes_sum.ngc", kSlopes);
+  const MachineConfig on = corrected_machine();
+  MachineConfig off = on;
+  off.direction_correction.enabled = false;
+  io::SummaryObserver with(on, "lookahead"), without(off, "lookahead");
+  sim::run_program(p, on, {}, {&with});
+  sim::run_program(p, off, {}, {&without});
+  with.set_time_without_correction_s(without.summary().cycle_time_s);
+  const io::Summary& s = with.summary();
+  EXPECT_NEAR(s.correction_min, 0.75, 1e-6);
+  EXPECT_NEAR(s.correction_max, 1.25, 1e-6);
+  EXPECT_NEAR(s.cycle_time_s - s.time_without_correction_s, 0.48, 0.003);
+  EXPECT_TRUE(std::isnan(without.summary().correction_min));  // off: no coefficient at all
+  const std::string json = io::summary_to_json(s, on);
+  EXPECT_NE(json.find("\"direction_correction\""), std::string::npos);
+  EXPECT_NE(json.find("\"time_added_s\""), std::string::npos);
+  EXPECT_EQ(io::summary_to_json(without.summary(), off).find("direction_correction"),
+            std::string::npos);
+  EXPECT_NE(io::format_human_summary(s, on, p).find("correction    C 0.750 … 1.250; added 0.48"),
+            std::string::npos)
+      << io::format_human_summary(s, on, p);
 }
 
 // ---- configuration -------------------------------------------------------------------------
