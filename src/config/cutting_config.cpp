@@ -170,7 +170,7 @@ ToolSpec read_tool(const CutReader& r, const toml::source_region& at, const toml
         tool.shape = ToolShape::kBullNose;
       } else {
         r.fail(key.source(),
-               fmt::format("{} = \"{}\": it must be \"flat\", \"ball\" or \"bull\"", name, v));
+               fmt::format(R"({} = "{}": it must be "flat", "ball" or "bull")", name, v));
       }
     } else if (k == "diameter_mm") {
       tool.diameter_mm = r.positive(key, node, name, "mm");

@@ -31,8 +31,13 @@ HeightMap HeightMap::from_stock(const StockConfig& s) {
   const auto n = [&s](double size) {
     return static_cast<std::size_t>(std::max(1.0, std::ceil(size / s.cell_mm - 1e-9)));
   };
-  return HeightMap(s.min_mm[0], s.min_mm[1], s.cell_mm, n(s.size_mm[0]), n(s.size_mm[1]),
-                   s.min_mm[2], s.min_mm[2] + s.size_mm[2]);
+  return {s.min_mm[0],
+          s.min_mm[1],
+          s.cell_mm,
+          n(s.size_mm[0]),
+          n(s.size_mm[1]),
+          s.min_mm[2],
+          s.min_mm[2] + s.size_mm[2]};
 }
 
 double HeightMap::volume_mm3() const {
@@ -76,7 +81,7 @@ double HeightMap::sweep(const ToolProfile& tool, const Vec3& a, const Vec3& b) {
   const double jhi = std::floor((by1 - y0_) / cell_ - 0.5);
   const double ilo_box = std::ceil((bx0 - x0_) / cell_ - 0.5);
   const double ihi_box = std::floor((bx1 - x0_) / cell_ - 0.5);
-  const double nxd = static_cast<double>(nx_), nyd = static_cast<double>(ny_);
+  const auto nxd = static_cast<double>(nx_), nyd = static_cast<double>(ny_);
   if (jhi < 0 || jlo > nyd - 1 || ihi_box < 0 || ilo_box > nxd - 1 || jlo > jhi) return 0;
   const auto j0 = static_cast<std::size_t>(std::max(0.0, jlo));
   const auto j1 = static_cast<std::size_t>(std::min(nyd - 1, jhi));
@@ -92,7 +97,7 @@ double HeightMap::sweep(const ToolProfile& tool, const Vec3& a, const Vec3& b) {
     nx = -dy / l;
     ny = dx / l;
   }
-  const float bottom_f = static_cast<float>(bottom_);
+  const auto bottom_f = static_cast<float>(bottom_);
   const float zmin_f = std::max(static_cast<float>(zmin), bottom_f);
   const double l3 = std::sqrt(lxy2 + dz * dz);
 
