@@ -139,6 +139,7 @@ class AdaptiveRun : public ::testing::Test {
       EXPECT_EQ(rep.count(p), 0u) << csv << ": " << ct::property_name(p) << "\n" << rep.summary();
     }
     EXPECT_LE(rep.max_tangential_accel_mm_s2, m.max_accel_mm_s2 * 1.005 + 1e-3) << csv;
+    if (std::getenv("ADAPTIVE_DEBUG")) std::printf("%s\n", rep.summary().c_str());
   }
 
   fs::path dir_;
@@ -212,6 +213,42 @@ TEST_F(AdaptiveRun, BackCalculationHalvesTheOverloadOfClampAndLimitsHold) {
   EXPECT_EQ(j_off.at("adaptive_feed").at("adaptive"), false);
   // 240 mm at F1000 and 100 %: at least 14.4 s.
   EXPECT_GT(j_off.at("cycle_time_s").get<double>(), 14.4);
+}
+
+TEST_F(AdaptiveRun, LimitsHoldWhateverTheControllerAsksOnArcsAndCorners) {
+  // The pocket example (tangent arcs, plunges, rapids) with a depth that jumps between 0.2 and
+  // 2 mm every 15 mm of path and an eager controller without adaptive limits (override swings
+  // between 0 and the machine's 200 %), and with back-calculation between 10 and 200 %.
+  fs::copy_file(fs::path(CNCORE_SOURCE_DIR) / "examples/pocket-with-arcs.ngc", dir_ / "p.ngc");
+  std::string depth = "[";
+  for (int k = 0; k < 40; ++k) {
+    const double d = k % 2 == 0 ? 0.2 : 2.0;
+    depth += (k > 0 ? ", " : "") + std::string("[") + std::to_string(15 * k) + ", " +
+             std::to_string(d) + "], [" + std::to_string(15 * (k + 1)) + ", " + std::to_string(d) +
+             "]";
+  }
+  depth += "]";
+  for (const std::string policy : {"none", "back_calculation"}) {
+    write(dir_ / "m.toml",
+          "[adaptive]\nenabled = true\nkp = 2\nki = 20\nkd = 0.02\n"
+          "upper_pct = 200\nantiwindup = \"" +
+              policy +
+              "\"\ncontrol_cycles = 5\n"
+              "[adaptive.plant]\nnoise_pct = 2\ntime_constant_s = 0.02\n"
+              "depth = " +
+              depth + "\n");
+    const Result r = run("run p.ngc --machine m.toml --trajectory t.csv");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const Csv c = read_csv(dir_ / "t.csv");
+    double lo = 1e9, hi = 0;
+    for (std::size_t i = 0; i < c.rows.size(); ++i) {
+      lo = std::min(lo, c.at(i, "override"));
+      hi = std::max(hi, c.at(i, "override"));
+    }
+    EXPECT_LT(lo, 60) << policy;  // the controller really swings the override
+    EXPECT_GT(hi, 190) << policy;
+    expect_limits("p.ngc", "t.csv", "m.toml");
+  }
 }
 
 TEST_F(AdaptiveRun, BelowThresholdTheOverrideIsTheOperators) {
