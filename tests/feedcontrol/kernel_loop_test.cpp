@@ -3,13 +3,33 @@
 // hold whatever the controller asks, and back-calculation still beats clamp after the jump.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <new>
 #include <vector>
 
 #include "feedcontrol/adaptive_loop.hpp"
+#include "feedcontrol/adaptive_run.hpp"
 #include "motion/kernel.hpp"
 #include "scenario.hpp"
+
+// Counts every heap allocation in this test program (the real-time check below).
+namespace {
+std::atomic<long> g_allocations{0};
+}  // namespace
+void* operator new(std::size_t n) {
+  ++g_allocations;
+  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
 
 using namespace cncore;
 using namespace cncore::feed;
@@ -96,4 +116,72 @@ TEST(KernelLoop, LimitsHoldAndBackCalculationBeatsClamp) {
       "back_calculation %.3f s, ratio %.3f\n",
       above[0], above[1], above[2], above[2] / above[1]);
   EXPECT_LE(above[2], 0.5 * above[1]);
+}
+
+// The motion cycle as `cncore run` drives it: Kernel::step, then the run's cycle controller
+// (M52 handling + loop), then set_override. No heap allocation in any cycle; the M52 events
+// reach the controller through the kernel's samples (P0 off: the operator's override).
+TEST(KernelLoop, RunCycleControllerAllocatesNothingAndFollowsM52) {
+  const MachineConfig m = machine();
+  motion::Kernel kernel(m, motion::KernelOptions{});
+  auto line = [](double x, std::uint32_t n) {
+    Block b;
+    b.kind = BlockKind::kLine;
+    b.line = n;
+    b.col = 1;
+    b.end[0] = x;
+    b.feed_mm_min = 1000;
+    return b;
+  };
+  auto m52 = [](double p, std::uint32_t n) {
+    Block b;
+    b.kind = BlockKind::kAux;
+    b.line = n;
+    b.col = 1;
+    b.aux_letter = 'M';
+    b.aux_value = 52;
+    b.aux_p = p;
+    return b;
+  };
+  Block first = line(110, 1);
+  kernel.push(first);
+  Block off = m52(0, 2);
+  off.start = off.end = first.end;
+  kernel.push(off);
+  Block second = line(175, 3);
+  second.start = first.end;
+  kernel.push(second);
+  Block on = m52(1, 4);
+  on.start = on.end = second.end;
+  kernel.push(on);
+  Block third = line(240, 5);
+  third.start = second.end;
+  kernel.push(third);
+  kernel.end_of_program();
+  PlantLoad plant(sc::plant());
+  feed::AdaptiveCycleController ctrl(m, sc::settings(AntiWindup::kBackCalculation), plant, "test");
+  motion::Sample s;
+  const long before = g_allocations.load();
+  std::uint64_t cycles = 0, off_cycles = 0, adapted_on_heavy_cut = 0;
+  double x_off = -1, x_on = -1;
+  while (kernel.step(s) && s.t_s < 60) {
+    const double o = ctrl.on_cycle(s, 95);
+    kernel.set_override(o);
+    ++cycles;
+    if (s.aux_letter == 'M' && s.aux_p == 0) x_off = s.position[0];
+    if (s.aux_letter == 'M' && s.aux_p == 1) x_on = s.position[0];
+    if (x_off >= 0 && x_on < 0) {
+      EXPECT_EQ(o, 95) << "t = " << s.t_s;
+      ++off_cycles;
+    }
+    if (x_on >= 0 && s.position[0] < 220 && o != 95) ++adapted_on_heavy_cut;
+  }
+  const long allocations = g_allocations.load() - before;
+  EXPECT_GT(before, 0);  // the counter does count (the set-up above allocated)
+  EXPECT_EQ(allocations, 0) << "over " << cycles << " cycles";
+  EXPECT_NEAR(x_off, 110, 0.05);
+  EXPECT_NEAR(x_on, 175, 0.05);
+  EXPECT_GT(off_cycles, 3000u);
+  EXPECT_GT(adapted_on_heavy_cut, 1000u);
+  EXPECT_EQ(ctrl.switch_count(), 2u);
 }
