@@ -194,10 +194,12 @@ MachineConfig with_correction_option(MachineConfig m, const std::string& option)
 }
 
 // Spec 03: cycle time of the same program with the direction correction off (a second run with
-// no outputs), for the time the correction added or saved.
+// no outputs), for the time the correction added or saved. Without the cycle controller: it holds
+// state (adaptive control, the cutting simulation's stock) that a second run must not touch.
 double cycle_time_without_correction_s(const std::string& program, MachineConfig machine,
-                                       const sim::RunOptions& options) {
+                                       sim::RunOptions options) {
   machine.direction_correction.enabled = false;
+  options.cycle_controller = nullptr;
   struct LastTime : sim::SampleObserver {
     double t_s = 0;
     void on_sample(const motion::Sample& s) override { t_s = s.t_s; }
@@ -313,7 +315,9 @@ int command_run(const RunArgs& a) {
       l.time_saved_s = l.time_without_adaptive_s - summary.summary().cycle_time_s;
     }
   }
-  if (machine.direction_correction.enabled) {
+  // With adaptive control running, a run without its controller would mix both effects: the
+  // correction's time is then not measured.
+  if (machine.direction_correction.enabled && !(adaptive && adaptive->ever_enabled())) {
     summary.set_time_without_correction_s(
         cycle_time_without_correction_s(a.program, machine, options));
   }
