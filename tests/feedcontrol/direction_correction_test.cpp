@@ -5,9 +5,11 @@
 #include "feedcontrol/direction_correction.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -347,6 +349,50 @@ TEST(DirectionCorrection, SummaryReportsTheRangeOfCAndTheTimeAdded) {
             std::string::npos)
       << io::format_human_summary(s, on, p);
 }
+
+#ifdef CNCORE_BIN
+// End to end through `cncore run` / `cncore machine`: the option, the column, the summary key and
+// the exit code of a bad law.
+int run_cli(const std::string& args, const std::string& stderr_file) {
+  const std::string cmd = std::string(CNCORE_BIN) + " " + args + " > /dev/null 2> " + stderr_file;
+  const int rc = std::system(cmd.c_str());
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+TEST(DirectionCorrectionCli, OptionColumnSummaryAndErrors) {
+  const std::string p = program_file("cli_slopes.ngc", kSlopes);
+  const std::string err = tmp_path("cli_err.txt");
+  const std::string on_csv = tmp_path("cli_on.csv"), on_json = tmp_path("cli_on.json");
+  ASSERT_EQ(
+      run_cli("run " + p + " --correction on --trajectory " + on_csv + " --summary " + on_json,
+              err),
+      0);
+  EXPECT_EQ(read_all(on_csv).substr(0, 28), "t,line,x,y,z,feed,correction");
+  const std::string json = read_all(on_json);
+  EXPECT_NE(json.find("\"direction_correction\""), std::string::npos) << json;
+  const std::size_t at = json.find("\"time_added_s\": ");
+  ASSERT_NE(at, std::string::npos) << json;
+  EXPECT_NEAR(std::strtod(json.c_str() + at + 16, nullptr), 0.48, 0.003) << json;  // by hand
+  // --correction off over an enabled machine: the plain run, byte for byte.
+  const std::string toml = program_file("cli_dc.toml", "[direction_correction]\nenabled = true\n");
+  const std::string plain = tmp_path("cli_plain.csv"), off = tmp_path("cli_off.csv");
+  ASSERT_EQ(run_cli("run " + p + " --trajectory " + plain, err), 0);
+  ASSERT_EQ(
+      run_cli("run " + p + " --machine " + toml + " --correction off --trajectory " + off, err), 0);
+  EXPECT_EQ(read_all(plain), read_all(off));
+  EXPECT_EQ(run_cli("run " + p + " --correction maybe", err), 2);
+  // A bad law: exit 1, FILE:LINE:COL with the FI.
+  const std::string bad =
+      program_file("cli_bad.toml", "[direction_correction]\ndownhill = \"1 + 2*FI\"\n");
+  EXPECT_EQ(run_cli("run " + p + " --machine " + bad, err), 1);
+  EXPECT_NE(read_all(err).find(bad + ":2:1: error: direction_correction.downhill: C = -1 at FI = "
+                                     "-1"),
+            std::string::npos)
+      << read_all(err);
+  const std::string printed = tmp_path("cli_machine.toml");
+  ASSERT_EQ(run_cli("machine --machine " + toml + " > " + printed, err), 0);
+}
+#endif
 
 // ---- configuration -------------------------------------------------------------------------
 
