@@ -260,9 +260,16 @@ int command_run(const RunArgs& a) {
   }
   std::optional<feed::AdaptiveCycleController> adaptive;
   if (load_source != nullptr) {
-    adaptive.emplace(machine, adaptive_settings, *load_source,
-                     a.machine.empty() ? std::string("built-in machine") : a.machine);
-    options.cycle_controller = &*adaptive;
+    // A cutting simulation alone (adaptive control not switched on) must not fail on adaptive
+    // settings the user never asked for (e.g. upper_pct above a lowered max_override_pct).
+    const bool cutting_only = cutting && load_source == &*cutting && !adaptive_settings.enabled;
+    try {
+      adaptive.emplace(machine, adaptive_settings, *load_source,
+                       a.machine.empty() ? std::string("built-in machine") : a.machine);
+    } catch (const InputError&) {
+      if (!cutting_only) throw;
+    }
+    if (adaptive) options.cycle_controller = &*adaptive;
   }
   // The simulator sweeps first each cycle, then hands the sample to the adaptive controller.
   std::optional<cut::CuttingCycleController> cutting_stage;

@@ -208,6 +208,18 @@ TEST_F(CuttingCli, StockErrorsNameTheKey) {
   EXPECT_FALSE(fs::exists(dir_ / "top.png"));
 }
 
+TEST_F(CuttingCli, CuttingAloneIgnoresAdaptiveSettingsItDoesNotUse) {
+  // The default adaptive.upper_pct (150) exceeds this machine's max_override_pct: only an
+  // error when adaptive control is asked for.
+  write("m120.toml", std::string(kMill) + "\n[motion]\nmax_override_pct = 120\n");
+  const Result r = run("run part.ngc --machine m120.toml");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("cutting       removed"), std::string::npos) << r.out;
+  const Result on = run("run part.ngc --machine m120.toml --adaptive on");
+  EXPECT_EQ(on.code, 1) << on.out;
+  EXPECT_NE(on.err.find("adaptive.upper_pct"), std::string::npos) << on.err;
+}
+
 TEST_F(CuttingCli, AdaptiveFeedOnTheSimulatedCutOfARealProgram) {
   // camotics/bear.nc (3D relief raster, F6000) on a stock whose top is 2 mm above the relief's
   // highest point, so the tool cuts all the way; cells of 0.5 mm keep the test short.
