@@ -38,7 +38,6 @@ Vec3 arc_tangent(const planner::Segment& s, double phi) {
 struct DirectionCorrector::Impl {
   Impl(const MachineConfig& m, std::string path)
       : program(std::move(path)),
-        machine(m),
         cfg(m.direction_correction),
         lim(planner::make_limits(m, m.bound_resultant_accel)),
         uphill(cfg.uphill),
@@ -46,7 +45,6 @@ struct DirectionCorrector::Impl {
         on(cfg.enabled && cfg.active_at_start) {}
 
   std::string program;
-  MachineConfig machine;
   DirectionCorrectionConfig cfg;
   planner::Limits lim;
   CorrectionEvaluator uphill, downhill;
@@ -58,8 +56,6 @@ struct DirectionCorrector::Impl {
   std::uint32_t pieces = 0, next_piece = 0;
   planner::Segment arc;  // geometry of the split arc
   AxisVec piece_start;
-
-  std::uint64_t corrected = 0, clamped = 0;
 };
 
 DirectionCorrector::DirectionCorrector(const MachineConfig& machine,
@@ -72,12 +68,6 @@ bool DirectionCorrector::enabled() const {
 }
 bool DirectionCorrector::active() const {
   return impl_->on;
-}
-std::uint64_t DirectionCorrector::corrected_moves() const {
-  return impl_->corrected;
-}
-std::uint64_t DirectionCorrector::clamped_moves() const {
-  return impl_->clamped;
 }
 
 double DirectionCorrector::ratio(const Vec3& d) const {
@@ -180,8 +170,6 @@ bool DirectionCorrector::next(Block& out) {
     m.next_piece = k + 1;
     if (last) m.pending = false;
   }
-  ++m.corrected;
-  if (out.feed_mm_min > m.machine.max_feed_mm_min) ++m.clamped;
   return true;
 }
 

@@ -54,10 +54,6 @@ class DirectionCorrector {
   bool enabled() const;
   bool active() const;  // enabled and switched on at this point of the program
 
-  // Diagnostics for the summary.
-  std::uint64_t corrected_moves() const;  // blocks or sub-arcs whose feed was scaled
-  std::uint64_t clamped_moves() const;    // F·C above the machine's max feed (clamped)
-
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
