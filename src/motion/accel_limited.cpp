@@ -128,6 +128,7 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       state_(3 * buffer.capacity(), State::kEmpty),
       entry_(3 * buffer.capacity()),
       key_geo_(3 * buffer.capacity()),
+      key_lattice_(3 * buffer.capacity()),
       active_geo_(3 * buffer.capacity()),
       active_feed_(3 * buffer.capacity()),
       release_(3 * buffer.capacity()),
@@ -184,8 +185,8 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   sigma_total_ += r * s.length_mm;
 
   const bool contiguous = have_prev_ && prev_end_mm_ == s.s0_mm;
-  const Cap caps[2] = {{s.s0_mm, s.end_mm(), vcap, sigma0_[slot], false},
-                       {s.s0_mm, s.end_mm(), s.feed_pc, sigma0_[slot], true}};
+  const Cap caps[2] = {{s.s0_mm, s.end_mm(), vcap, sigma0_[slot], false, vcap >= a0_},
+                       {s.s0_mm, s.end_mm(), s.feed_pc, sigma0_[slot], true, false}};
   for (std::size_t k = 0; k < 2; ++k) {
     const std::size_t to = 3 * slot + k;
     if (contiguous) {
@@ -213,7 +214,9 @@ void AccelLimitedAccDec::insert_joint_cap(std::size_t slot_a, double joint_mm, d
                                           double ratio_a, double len_a, double vg) {
   // σ(j − Vg): exact inside a; before a, σ(j) − Vg is smaller (r ≤ 1), so K stays strict.
   const double sigma_c = vg <= len_a ? sigma_joint - ratio_a * vg : sigma_joint - vg;
-  insert(3 * slot_a + 2, Cap{joint_mm - vg, joint_mm + vg, vg, sigma_c, false});
+  // Lattice form where it cannot stall before the cap takes over (see 3.).
+  const bool lattice = vg >= a0_ || (vg >= 0.5 * a0_ && ratio_a >= 0.5 && len_a >= 2 * vg);
+  insert(3 * slot_a + 2, Cap{joint_mm - vg, joint_mm + vg, vg, sigma_c, false, lattice});
 }
 
 void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const Segment& b) {
@@ -273,14 +276,18 @@ void AccelLimitedAccDec::on_retire(std::uint64_t index) {
 void AccelLimitedAccDec::insert(std::size_t slot, const Cap& cap) {
   clear(slot);
   caps_[slot] = cap;
-  if (pos_mm_ >= cap.c_mm) {
+  const double entry = entry_mm(cap);
+  if (pos_mm_ >= entry) {
     activate(slot);
     return;
   }
   state_[slot] = State::kApproaching;
-  entry_.set(slot, cap.c_mm);
+  entry_.set(slot, entry);
   const double k_sigma = 2 * a0_ * cap.sigma_c;
-  if (cap.feed) {
+  if (cap.lattice) {
+    const double h = cap.v - 0.5 * a0_;
+    key_lattice_.set(slot, h * h + k_sigma);
+  } else if (cap.feed) {
     for (std::size_t j = 0; j < levels_; ++j) {
       const double v = static_cast<double>(j) * level_step_ * cap.v;
       key_feed_[j].set(slot, v * v + k_sigma);
@@ -290,15 +297,29 @@ void AccelLimitedAccDec::insert(std::size_t slot, const Cap& cap) {
   }
 }
 
+double AccelLimitedAccDec::entry_mm(const Cap& cap) {
+  // A lattice key's bound is V one step before c and may fall to 0 just before c when V < A0
+  // (the lattice's last step can be larger than V and must then land short of c): such a cap
+  // takes over one step earlier, at c − V, where any step ≤ V is allowed anyway.
+  return cap.lattice ? cap.c_mm - cap.v : cap.c_mm;
+}
+
+void AccelLimitedAccDec::clear_keys(std::size_t slot) {
+  const Cap& cap = caps_[slot];
+  entry_.set(slot, MinTree::kEmpty);
+  if (cap.lattice) {
+    key_lattice_.set(slot, MinTree::kEmpty);
+  } else if (cap.feed) {
+    for (auto& t : key_feed_) t.set(slot, MinTree::kEmpty);
+  } else {
+    key_geo_.set(slot, MinTree::kEmpty);
+  }
+}
+
 void AccelLimitedAccDec::activate(std::size_t slot) {
   const Cap& cap = caps_[slot];
   if (state_[slot] == State::kApproaching) {
-    entry_.set(slot, MinTree::kEmpty);
-    if (cap.feed) {
-      for (auto& t : key_feed_) t.set(slot, MinTree::kEmpty);
-    } else {
-      key_geo_.set(slot, MinTree::kEmpty);
-    }
+    clear_keys(slot);
   }
   state_[slot] = State::kActive;
   (cap.feed ? active_feed_ : active_geo_).set(slot, cap.v);
@@ -309,12 +330,7 @@ void AccelLimitedAccDec::clear(std::size_t slot) {
   if (state_[slot] == State::kEmpty) return;
   const bool feed = caps_[slot].feed;
   if (state_[slot] == State::kApproaching) {
-    entry_.set(slot, MinTree::kEmpty);
-    if (feed) {
-      for (auto& t : key_feed_) t.set(slot, MinTree::kEmpty);
-    } else {
-      key_geo_.set(slot, MinTree::kEmpty);
-    }
+    clear_keys(slot);
   } else {
     (feed ? active_feed_ : active_geo_).set(slot, MinTree::kEmpty);
     release_.set(slot, MinTree::kEmpty);
@@ -360,7 +376,12 @@ AccelLimitedAccDec::Bounds AccelLimitedAccDec::bound(double or_ratio, double sig
   };
   const std::size_t level =
       std::min(levels_ - 1, static_cast<std::size_t>(std::floor(or_ratio / level_step_ + 1e-9)));
-  const double geo = std::min(active_geo_.min(), brake(key_geo_.min()));
+  const double k_lat = key_lattice_.min();
+  const double lat =
+      k_lat == kInf
+          ? kInf
+          : std::max(0.0, std::sqrt(std::max(0.0, k_lat - 2 * a0_ * sigma_p)) - 0.5 * a0_);
+  const double geo = std::min({active_geo_.min(), brake(key_geo_.min()), lat});
   const double feed = std::min(or_ratio * active_feed_.min(), brake(key_feed_[level].min()));
   return {geo, feed};
 }
@@ -381,8 +402,13 @@ double AccelLimitedAccDec::reference_bound(double or_ratio) const {
     if (state_[i] == State::kEmpty) continue;
     const Cap& c = caps_[i];
     if (pos_mm_ >= c.e_mm) continue;
-    if (pos_mm_ >= c.c_mm) {
+    if (pos_mm_ >= entry_mm(c)) {
       out = std::min(out, c.feed ? or_ratio * c.v : c.v);
+    } else if (c.lattice) {
+      const double h = c.v - 0.5 * a0_;
+      const double k = h * h + 2 * a0_ * c.sigma_c;
+      out =
+          std::min(out, std::max(0.0, std::sqrt(std::max(0.0, k - 2 * a0_ * sigma_p)) - 0.5 * a0_));
     } else {
       const double v = c.feed ? static_cast<double>(level) * level_step_ * c.v : c.v;
       const double k = v * v + 2 * a0_ * c.sigma_c;

@@ -49,6 +49,7 @@ class AccelLimitedAccDec final : public AccDec {
     double v = 0;
     double sigma_c = 0;  // σ(c) (see the derivation)
     bool feed = false;
+    bool lattice = false;  // braking key in the exact discrete (lattice) form, see 3.
   };
   enum class State : std::uint8_t { kEmpty, kApproaching, kActive };
 
@@ -56,6 +57,8 @@ class AccelLimitedAccDec final : public AccDec {
   void insert_joint_cap(std::size_t slot_a, double joint_mm, double sigma_joint, double ratio_a,
                         double len_a, double vg);
   void activate(std::size_t slot);
+  void clear_keys(std::size_t slot);
+  static double entry_mm(const Cap& cap);
   void clear(std::size_t slot);
   double sigma_at(double pos_mm) const;  // σ of a path position inside the buffer
   void advance_current();
@@ -79,7 +82,7 @@ class AccelLimitedAccDec final : public AccDec {
   // Caps: three slots per buffer slot (range cap of the segment's speed, of its feed, joint cap).
   std::vector<Cap> caps_;
   std::vector<State> state_;
-  planner::MinTree entry_, key_geo_, active_geo_, active_feed_, release_;
+  planner::MinTree entry_, key_geo_, key_lattice_, active_geo_, active_feed_, release_;
   std::vector<planner::MinTree> key_feed_;  // one per override level
 
   // Range caps of the previous segment (to extend them instead of adding a cap per segment).
