@@ -148,7 +148,10 @@ void read_adaptive_section(const std::string& file, const toml::key& section,
   for (const auto& [key, value] : *t) {
     const std::string k(key.str());
     const std::string name = "adaptive." + k;
-    auto real = [&] { return number(file, key.source(), value, name); };
+    // Captured through references: clang 14 (the fuzz preset) cannot capture structured bindings.
+    const toml::key& key_ref = key;
+    const toml::node& value_ref = value;
+    auto real = [&] { return number(file, key_ref.source(), value_ref, name); };
     if (k == "enabled") {
       const auto* b = value.as_boolean();
       if (b == nullptr) fail(file, key.source(), name + " must be true or false");
