@@ -151,9 +151,16 @@ TEST(DirectionCorrection, ReplaceModeIgnoresTheOverride) {
   const std::string p = program_file("slopes_c.ngc", kSlopes);
   const MachineConfig m = corrected_machine("override_mode = \"replace\"\n");
   const std::string csv = tmp_path("slopes_c.csv");
-  run_to_csv(p, m, csv, 50);
+  const std::vector<Block> blocks = run_to_csv(p, m, csv, 50);
   const testing::Trajectory tr = testing::load_trajectory_csv(csv);
   expect_slopes(tr, 1.25, 1.0, 0.75);  // F × C: the 50 % override does not act
+  // Within spec 01 against the blocks as the kernel got them (feed F·C), the switch ignored.
+  testing::Trajectory same = tr;
+  std::fill(same.override_pct.begin(), same.override_pct.end(), 100.0);
+  std::fill(same.correction.begin(), same.correction.end(), 1.0);
+  const testing::CheckReport r =
+      testing::check_trajectory(same, blocks, testing::limits_from_config(m));
+  EXPECT_TRUE(r.ok()) << r.summary();
 }
 
 TEST(DirectionCorrection, UserFormulaWithFeedAndDiameterAndOtherDirection) {
