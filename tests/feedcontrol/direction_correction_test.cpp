@@ -59,9 +59,11 @@ struct BlockRecorder : sim::SampleObserver {
 
 // Runs the program and writes the trajectory CSV (correction column when enabled).
 std::vector<Block> run_to_csv(const std::string& program, const MachineConfig& m,
-                              const std::string& csv, double override_pct = 100) {
+                              const std::string& csv, double override_pct = 100,
+                              motion::AccDecType accdec = motion::AccDecType::kMovingAverage) {
   sim::RunOptions o;
   o.kernel.override_pct = override_pct;
+  o.kernel.accdec = accdec;
   io::TrajectoryColumns cols;
   cols.override_pct = true;
   cols.correction = m.direction_correction.enabled;
@@ -161,6 +163,18 @@ TEST(DirectionCorrection, ReplaceModeIgnoresTheOverride) {
   const testing::CheckReport r =
       testing::check_trajectory(same, blocks, testing::limits_from_config(m));
   EXPECT_TRUE(r.ok()) << r.summary();
+}
+
+// The second acc/dec type (issue 9, constant acceleration before interpolation): the correction
+// is in the commanded feed, so it holds there too, in both override modes.
+TEST(DirectionCorrection, AccelerationLimitedAccDecToo) {
+  const std::string p = program_file("slopes_acc.ngc", kSlopes);
+  const std::string a = tmp_path("slopes_acc.csv"), b = tmp_path("slopes_acc_c.csv");
+  run_to_csv(p, corrected_machine(), a, 80, motion::AccDecType::kAcceleration);
+  expect_slopes(testing::load_trajectory_csv(a), 1.25 * 0.8, 1.0 * 0.8, 0.75 * 0.8);
+  run_to_csv(p, corrected_machine("override_mode = \"replace\"\n"), b, 50,
+             motion::AccDecType::kAcceleration);
+  expect_slopes(testing::load_trajectory_csv(b), 1.25, 1.0, 0.75);
 }
 
 TEST(DirectionCorrection, UserFormulaWithFeedAndDiameterAndOtherDirection) {
