@@ -4,32 +4,47 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "feedcontrol/direction_correction.hpp"
 
 namespace cncore::sim {
 
 ProgramStepper::ProgramStepper(const std::string& program_path, const MachineConfig& machine,
                                const motion::KernelOptions& kernel_options,
                                const interp::Options& interpreter_options)
-    : interpreter_(program_path, machine, interpreter_options), kernel_(machine, kernel_options) {}
+    : interpreter_(program_path, machine, interpreter_options),
+      kernel_(machine, kernel_options),
+      corrector_(std::make_unique<feed::DirectionCorrector>(machine, program_path)) {}
+
+ProgramStepper::~ProgramStepper() = default;
 
 bool ProgramStepper::next(motion::Sample& out) {
   // Read blocks only while the buffer has room: memory stays bounded whatever the length.
+  // One interpreted block may give several kernel blocks (an arc split by the direction
+  // correction), handed out one at a time.
   while (more_ && kernel_.wants_block()) {
     bool got = false;
     try {
-      got = interpreter_.next(block_);
+      got = corrector_->next(block_);
+      if (!got) {
+        got = interpreter_.next(source_);
+        if (got) {
+          if (source_.kind == BlockKind::kRapid || source_.kind == BlockKind::kLine ||
+              source_.kind == BlockKind::kArc) {
+            ++blocks_;
+          }
+          corrector_->put(source_);
+          continue;
+        }
+      }
     } catch (const InputError&) {
       // Finish the motion of the good blocks first, then report.
       error_ = std::current_exception();
+      got = false;
     }
     if (!got) {
       more_ = false;
       kernel_.end_of_program();
       break;
-    }
-    if (block_.kind == BlockKind::kRapid || block_.kind == BlockKind::kLine ||
-        block_.kind == BlockKind::kArc) {
-      ++blocks_;
     }
     kernel_.push(block_);
   }

@@ -6,11 +6,16 @@
 
 #include <cstdint>
 #include <exception>
+#include <memory>
 #include <string>
 
 #include "config/machine_config.hpp"
 #include "interpreter/interpreter.hpp"
 #include "motion/kernel.hpp"
+
+namespace cncore::feed {
+class DirectionCorrector;
+}  // namespace cncore::feed
 
 namespace cncore::sim {
 
@@ -19,6 +24,9 @@ class ProgramStepper {
   ProgramStepper(const std::string& program_path, const MachineConfig& machine,
                  const motion::KernelOptions& kernel_options,
                  const interp::Options& interpreter_options = {});
+  ~ProgramStepper();
+  ProgramStepper(const ProgramStepper&) = delete;
+  ProgramStepper& operator=(const ProgramStepper&) = delete;
 
   // The next sample (the first one is the start position at t = 0). Returns false, writing
   // nothing, once the program has ended and the machine has stopped. An error in the program
@@ -32,6 +40,9 @@ class ProgramStepper {
  private:
   interp::Interpreter interpreter_;
   motion::Kernel kernel_;
+  // The direction feed correction stage (spec 03), as in run_program.
+  std::unique_ptr<feed::DirectionCorrector> corrector_;
+  Block source_;
   Block block_;
   bool more_ = true;  // the interpreter may still produce blocks
   std::exception_ptr error_;

@@ -24,6 +24,7 @@
 #include "io/trajectory_csv.hpp"
 #include "limits.hpp"
 #include "simulation/run.hpp"
+#include "simulation/stepper.hpp"
 #include "trajectory.hpp"
 #include "trajectory_checker.hpp"
 
@@ -321,6 +322,36 @@ TEST(DirectionCorrection, ArcInAVerticalPlaneFollowsTheLocalTangent) {
   const testing::CheckReport r =
       testing::check_trajectory(same, blocks, testing::limits_from_config(m));
   EXPECT_TRUE(r.ok()) << r.summary();
+}
+
+// The pulled stepper (cncore table --master-program) runs the same corrected motion.
+TEST(DirectionCorrection, ProgramStepperMatchesRunProgram) {
+  const std::string p = program_file(
+      "stepper.ngc", "G21 G90 G18\nG0 X0 Y0 Z0\nG2 X40 Z0 I20 K0 F1000\nG1 X60 Z10\nM30\n");
+  const MachineConfig m = corrected_machine();
+  struct Positions : sim::SampleObserver {
+    std::vector<AxisVec> p;
+    std::vector<double> c;
+    void on_sample(const motion::Sample& s) override {
+      p.push_back(s.position);
+      c.push_back(s.correction);
+    }
+  } run;
+  const sim::RunCounts counts = sim::run_program(p, m, {}, {&run});
+  sim::ProgramStepper stepper(p, m, motion::KernelOptions{});
+  motion::Sample s;
+  std::size_t k = 0;
+  while (stepper.next(s)) {
+    ASSERT_LT(k, run.p.size());
+    ASSERT_EQ(s.position, run.p[k]) << k;
+    if (!std::isnan(run.c[k])) {
+      ASSERT_EQ(s.correction, run.c[k]) << k;
+    }
+    ++k;
+  }
+  EXPECT_EQ(k, run.p.size());
+  EXPECT_EQ(stepper.blocks(), counts.blocks);  // interpreted blocks, not sub-arcs
+  EXPECT_EQ(counts.blocks, 2u);                // the G0 to the start position moves nothing
 }
 
 TEST(DirectionCorrection, RealSurfacingProgramStaysWithinLimits) {
