@@ -255,7 +255,23 @@ void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const
   const double vg_before = chained ? prev_.vg : kInf;
   prev_ = {true, index_a,   buf_.end_index() - 1, a.end_direction(), before,
            vg,   vg_before, a.length_mm < vg};
-  if (!(vg < 0.999 * around)) return;  // the segments' own caps already hold there
+  // A turn in the same cycle as a speed change: per axis the second difference is up to
+  // v·|S_i − E_i| + Δv·max(|S_i|, |E_i|). Where that can exceed a_i (0.4 % kept for rounding)
+  // the joint gets a cap even at the segments' speed, and no acceleration happens while a joint
+  // cap is active (step()).
+  bool flat = false;
+  {
+    const AxisVec e = a.end_direction(), st = b.start_direction();
+    const double dv = a0_ * std::max(ratio_[sa], ratio_[sb]);
+    for (std::size_t i = 0; i < kMaxAxes && !flat; ++i) {
+      if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
+      const double turn = std::abs(st[i] - e[i]);
+      if (turn < 1e-12) continue;
+      flat = vg * turn + dv * std::max(std::abs(st[i]), std::abs(e[i])) >
+             0.996 * lim_.axis_amax_pc2[i];
+    }
+  }
+  if (!(vg < 0.999 * around) && !flat) return;  // the segments' own caps already hold there
   insert_joint_cap(sa, a.end_mm(), sigma0_[sa] + ratio_[sa] * a.length_mm, ratio_[sa], a.length_mm,
                    vg);
 }
@@ -322,6 +338,7 @@ void AccelLimitedAccDec::activate(std::size_t slot) {
     clear_keys(slot);
   }
   state_[slot] = State::kActive;
+  if (slot % 3 == 2) ++active_joints_;
   (cap.feed ? active_feed_ : active_geo_).set(slot, cap.v);
   release_.set(slot, cap.e_mm);
 }
@@ -334,6 +351,7 @@ void AccelLimitedAccDec::clear(std::size_t slot) {
   } else {
     (feed ? active_feed_ : active_geo_).set(slot, MinTree::kEmpty);
     release_.set(slot, MinTree::kEmpty);
+    if (slot % 3 == 2) --active_joints_;
   }
   state_[slot] = State::kEmpty;
 }
@@ -468,6 +486,9 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   }
 
   double u = in.hold ? step_ - a : step_ + a;
+  // Around a corner (a joint cap active) the speed does not rise, except from a near stop up
+  // to V_t (a stop right at a corner: the first steps are then ≤ V_t, within every axis limit).
+  if (active_joints_ > 0) u = std::min(u, std::max(step_, tail_cap_pc_));
   // Geometric caps and stops are hard limits; the feed limit may drop by more than one step's
   // deceleration only when the override is lowered: then decelerate at A_seg.
   u = std::min({u, std::max(step_ - a, caps.feed), caps.geo, stop_limit, to_stop});
