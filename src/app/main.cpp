@@ -178,6 +178,7 @@ class ProgressObserver : public sim::SampleObserver {
 
 struct RunArgs {
   std::string program, machine, trajectory, summary, mode = "lookahead";
+  std::string accdec;  // --accdec; empty: the machine's [motion] accdec
   std::optional<double> override_pct;
   std::vector<std::string> override_at, vars, params;
   std::string correction;  // --correction on|off; empty: [direction_correction] enabled
@@ -213,6 +214,10 @@ int command_run(const RunArgs& a) {
   sim::RunOptions options;
   options.kernel.mode = a.mode == "stop" ? motion::Mode::kStop : motion::Mode::kLookahead;
   options.kernel.bound_resultant_accel = machine.bound_resultant_accel;
+  const bool accel_type = a.accdec.empty() ? machine.accdec == AccDecKind::kAcceleration
+                                           : a.accdec == "acceleration";
+  options.kernel.accdec =
+      accel_type ? motion::AccDecType::kAcceleration : motion::AccDecType::kMovingAverage;
   if (a.override_pct) {
     options.kernel.override_pct =
         override_value("--override", fmt::format("{}", *a.override_pct), machine.max_override_pct);
@@ -681,6 +686,11 @@ int main_cli(int argc, char** argv) {
   run->add_option("--mode", ra.mode, "lookahead (default) or stop (stop at every block)")
       ->check(CLI::IsMember({"lookahead", "stop"}))
       ->type_name("MODE");
+  run->add_option("--accdec", ra.accdec,
+                  "Look-ahead acc/dec type: acceleration or moving_average (default: the "
+                  "machine's [motion] accdec)")
+      ->check(CLI::IsMember({"acceleration", "moving_average"}))
+      ->type_name("TYPE");
   run->add_option("--override", ra.override_pct, "Constant feed override, %")->type_name("PCT");
   run->add_option("--override-at", ra.override_at,
                   "Override steps TIME:PCT[,TIME:PCT...] (time in s, override in %)")

@@ -165,6 +165,16 @@ void read_motion(const Reader& r, const toml::table& t, MachineConfig& c) {
       c.max_override_pct = r.number_in(key, node, name, 100, false, 1000, "%");
     } else if (k == "bound_resultant_accel") {
       c.bound_resultant_accel = r.boolean(key, node, name);
+    } else if (k == "accdec") {
+      const auto* s = node.as_string();
+      if (s != nullptr && s->get() == "acceleration") {
+        c.accdec = AccDecKind::kAcceleration;
+      } else if (s != nullptr && s->get() == "moving_average") {
+        c.accdec = AccDecKind::kMovingAverage;
+      } else {
+        r.fail(key.source(),
+               fmt::format("{} must be \"acceleration\" or \"moving_average\"", name));
+      }
     } else {
       r.unknown(key, name);
     }
@@ -580,6 +590,10 @@ std::string machine_config_to_toml(const MachineConfig& c) {
        "highest feed override accepted, % (100 … 1000)");
   line(fmt::format("bound_resultant_accel = {}", c.bound_resultant_accel),
        "arcs: true = tangential+normal resultant <= Amax; false = each <= Amax (seed)");
+  line(fmt::format("accdec = \"{}\"",
+                   c.accdec == AccDecKind::kAcceleration ? "acceleration" : "moving_average"),
+       "look-ahead acc/dec: \"acceleration\" = constant acceleration, a speed change takes "
+       "|dV|/Amax; \"moving_average\" = the seed's filter, every change takes T = Vmax/Amax");
 
   o += "\n[interpreter]\n";
   line("max_loop_iterations = " + std::to_string(c.max_loop_iterations),

@@ -27,6 +27,13 @@ struct AxisConfig {
 
 // [tables] cancel_mode (spec 02): what SFTCAN does with the accumulated reference shift. The
 // command maps it onto tables::CancelMode (the config library does not depend on the tables).
+// [motion] accdec (issue 9): the acc/dec type of look-ahead mode. The app maps it onto
+// motion::AccDecType (the config library does not depend on the motion stage).
+enum class AccDecKind : std::uint8_t {
+  kMovingAverage,  // "moving_average": the seed's look-ahead + moving average of T cycles
+  kAcceleration,   // "acceleration": constant-acceleration planning before interpolation
+};
+
 enum class TableCancelMode : std::uint8_t {
   kClear,   // "clear": the amount becomes 0, later rows use their written reference values
   kRebase,  // "rebase": the running reference is reset by the amount, later gaps stay shifted
@@ -72,6 +79,7 @@ struct MachineConfig {
   // On arcs, bound the resultant of tangential and normal acceleration by Amax (true), or each
   // of them separately (false, the seed's way: the resultant may reach √2·Amax).
   bool bound_resultant_accel = false;
+  AccDecKind accdec = AccDecKind::kMovingAverage;  // look-ahead acc/dec type
   std::array<double, kMaxAxes> start_position{};  // position at program start ([axes.x] start_mm)
 
   // [axes.x] ...
