@@ -22,7 +22,8 @@ import os
 
 W, H = 720, 330
 LEFT, RIGHT, TOP, BOTTOM = 70, 16, 34, 46
-COLOURS = {"look-ahead": "#1f5fbf", "stop": "#c03020"}
+COLOURS = {"look-ahead": "#1f5fbf", "stop": "#c03020", "moving average": "#1f5fbf",
+           "acceleration": "#c03020"}
 
 
 def read_positions(path):
@@ -119,10 +120,14 @@ def main():
                     help="dashed reference line on the speed plot")
     ap.add_argument("--ref-accel", action="append", default=[], metavar="MM_S2:LABEL",
                     help="dashed reference line on the acceleration plot")
+    ap.add_argument("--labels", default="look-ahead,stop", metavar="A,B",
+                    help="names of the two runs (e.g. 'moving average,acceleration')")
+    ap.add_argument("--prefix", default="lookahead", help="file names PREFIX_speed/_accel.svg")
     args = ap.parse_args()
+    label_a, _, label_b = args.labels.partition(",")
 
     runs = []
-    for name, path in (("look-ahead", args.lookahead_csv), ("stop", args.stop_csv)):
+    for name, path in ((label_a, args.lookahead_csv), (label_b, args.stop_csv)):
         ts, ps, _ = read_positions(path)
         _, v, a = speed_accel(ts, ps)
         runs.append((name, ts, v, a))
@@ -144,10 +149,10 @@ def main():
     a_top = max([a_abs] + [abs(y) for y, _ in ra]) * 1.12
     os.makedirs(args.out_dir, exist_ok=True)
     times = ", ".join("%s %.3f s" % (r[0], r[1][-1]) for r in runs)
-    plot(os.path.join(args.out_dir, "lookahead_speed.svg"),
+    plot(os.path.join(args.out_dir, args.prefix + "_speed.svg"),
          "Path speed, %s: %s" % (args.title, times), "path speed [mm/s]",
          [(r[0], r[1], r[2]) for r in runs], x_max, 0, v_top, rs)
-    plot(os.path.join(args.out_dir, "lookahead_accel.svg"),
+    plot(os.path.join(args.out_dir, args.prefix + "_accel.svg"),
          "Tangential acceleration, %s" % args.title, "tangential acceleration [mm/s²]",
          [(r[0], r[1], r[3]) for r in runs], x_max, -a_top, a_top, ra)
 

@@ -64,9 +64,11 @@ struct RunStats {
 };
 
 // Runs the whole program; `time_each` measures every step() separately (worst cycle).
-RunStats run(const std::vector<Block>& blocks, bool time_each) {
+RunStats run(const std::vector<Block>& blocks, bool time_each, motion::AccDecType type) {
   const MachineConfig m = machine();
-  motion::Kernel k(m, {});
+  motion::KernelOptions o;
+  o.accdec = type;
+  motion::Kernel k(m, o);
   std::size_t next = 0;
   motion::Sample s;
   RunStats st;
@@ -98,22 +100,29 @@ RunStats run(const std::vector<Block>& blocks, bool time_each) {
 }
 
 // Cycles per second: the run includes pushing the blocks (the interpreter's output), as the
-// simulation does. Arg: refine factor (1 or 100).
+// simulation does. Args: refine factor (1 or 100), acc/dec type (0 moving average, 1 acceleration).
 void BM_KernelCycles(benchmark::State& state) {
   const auto blocks = random_path(2000, static_cast<int>(state.range(0)));
   std::uint64_t cycles = 0;
-  for (auto _ : state) cycles += run(blocks, false).cycles;
+  const auto type = static_cast<motion::AccDecType>(state.range(1));
+  for (auto _ : state) cycles += run(blocks, false, type).cycles;
   state.counters["cycles_per_s"] =
       benchmark::Counter(static_cast<double>(cycles), benchmark::Counter::kIsRate);
   state.counters["blocks"] = static_cast<double>(blocks.size());
 }
-BENCHMARK(BM_KernelCycles)->Arg(1)->Arg(100)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_KernelCycles)
+    ->Args({1, 0})
+    ->Args({100, 0})
+    ->Args({1, 1})
+    ->Args({100, 1})
+    ->Unit(benchmark::kMillisecond);
 
 // Worst single step() with a full 10 000-block window (the 100× finer path keeps it full).
 void BM_KernelWorstCycle(benchmark::State& state) {
   const auto blocks = random_path(2000, static_cast<int>(state.range(0)));
   RunStats st;
-  for (auto _ : state) st = run(blocks, true);
+  const auto type = static_cast<motion::AccDecType>(state.range(1));
+  for (auto _ : state) st = run(blocks, true, type);
   // Per step() (wall clock, two clock reads included): median, 99.9 %, worst (the worst is
   // dominated by preemption on a shared machine).
   state.counters["step_p50_ns"] = st.p50_s * 1e9;
@@ -121,7 +130,13 @@ void BM_KernelWorstCycle(benchmark::State& state) {
   state.counters["worst_cycle_us"] = st.worst_cycle_s * 1e6;
   state.counters["cycles"] = static_cast<double>(st.cycles);
 }
-BENCHMARK(BM_KernelWorstCycle)->Arg(1)->Arg(100)->Unit(benchmark::kMillisecond)->Iterations(2);
+BENCHMARK(BM_KernelWorstCycle)
+    ->Args({1, 0})
+    ->Args({100, 0})
+    ->Args({1, 1})
+    ->Args({100, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(2);
 
 }  // namespace
 
