@@ -275,23 +275,27 @@ TEST_F(AdaptiveRun, BelowThresholdTheOverrideIsTheOperators) {
 
 TEST_F(AdaptiveRun, M52OffSectionRunsAtTheOperatorsOverride) {
   // On from the start (config), off from X100 to X180 (M52 P0), on again (M52 P1, no P = on).
+  // The operator turns the override from 90 to 70 % at t = 7 s, inside the off section (which
+  // runs from about 4.5 to 9.8 s).
   write(dir_ / "m52.ngc", "G21 G90 G1 X100 F1000\nM52 P0\nX180\nM52\nX240\nM2\n");
   write(dir_ / "m.toml", machine_toml("back_calculation"));
   const Result r =
-      run("run m52.ngc --machine m.toml --override 90 --trajectory t.csv "
+      run("run m52.ngc --machine m.toml --override 90 --override-at 7:70 --trajectory t.csv "
           "--summary s.json");
   ASSERT_EQ(r.code, 0) << r.err;
   const Csv c = read_csv(dir_ / "t.csv");
   std::size_t off_rows = 0, adapted_before = 0, adapted_after = 0;
   for (std::size_t i = 0; i < c.rows.size(); ++i) {
-    const double x = c.at(i, "x"), o = c.at(i, "override");
+    const double x = c.at(i, "x"), o = c.at(i, "override"), t = c.at(i, "t");
     // The switch acts from the cycle after the one that passes X100; one cycle moves < 0.05 mm.
+    // The step at 7 s is set before the cycle at t = 7 and runs from the next one.
+    const double operator_pct = t < 7.0005 ? 90 : 70;
     if (x > 100.1 && x < 179.9) {
-      ASSERT_EQ(o, 90) << "row " << i << " x " << x;
+      ASSERT_EQ(o, operator_pct) << "row " << i << " x " << x << " t " << t;
       ++off_rows;
     }
-    if (x > 20 && x < 99 && o != 90) ++adapted_before;
-    if (x > 185 && x < 215 && o != 90) ++adapted_after;
+    if (x > 20 && x < 99 && o != operator_pct) ++adapted_before;
+    if (x > 185 && x < 215 && o != operator_pct) ++adapted_after;
   }
   EXPECT_GT(off_rows, 3000u);
   EXPECT_GT(adapted_before, 1000u);
