@@ -26,7 +26,8 @@
 #endif
 #endif
 #ifdef CNCORE_RUN_TEST_ASAN
-#include <sanitizer/allocator_interface.h>
+// From the sanitizer runtime (gcc ships no <sanitizer/allocator_interface.h>).
+extern "C" std::size_t __sanitizer_get_current_allocated_bytes();
 #endif
 
 namespace cncore::sim {
