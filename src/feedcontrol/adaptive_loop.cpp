@@ -1,5 +1,6 @@
 #include "feedcontrol/adaptive_loop.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace cncore::feed {
@@ -18,7 +19,8 @@ AdaptiveFeedLoop::AdaptiveFeedLoop(const AdaptiveSettings& settings, double peri
     : controller_(validated(settings, max_override_pct), period_s * settings.control_cycles,
                   max_override_pct),
       source_(&source),
-      enabled_(settings.enabled) {}
+      enabled_(settings.enabled),
+      max_override_pct_(max_override_pct) {}
 
 void AdaptiveFeedLoop::set_enabled(bool on) noexcept {
   if (on && !enabled_) {
@@ -36,13 +38,18 @@ double AdaptiveFeedLoop::cycle(double t_s, double path_s_mm, double feed_mm_min,
     return override_pct_;
   }
   if (cycles_to_control_ == 0) {
-    override_pct_ = controller_.update(last_load_pct_, operator_override_pct);
+    // The controller works on its own factor (100 % = as programmed); its limits and its
+    // anti-wind-up apply to that factor, whatever the operator does with the override.
+    adaptive_pct_ = controller_.update(last_load_pct_, 100.0);
     cycles_to_control_ = controller_.settings().control_cycles;
-  } else if (!controller_.state().active) {
-    // Idle (not cutting): the operator's override passes at once, not at the next control cycle.
-    override_pct_ = operator_override_pct;
   }
   --cycles_to_control_;
+  // Idle (not cutting): the operator's override passes at once, not at the next control cycle.
+  // Cutting: both act on the feed, F·(adaptive)·(operator), so an operator who turns the
+  // override down slows an adaptive cut too.
+  override_pct_ = controller_.state().active
+                      ? std::min(max_override_pct_, adaptive_pct_ * operator_override_pct / 100.0)
+                      : operator_override_pct;
   return override_pct_;
 }
 

@@ -17,8 +17,10 @@ class AdaptiveFeedLoop {
                    LoadSource& source);
 
   // One interpolation cycle: the tool is at path distance path_s_mm at time t_s moving at
-  // feed_mm_min. Returns the override (%) to apply from the next cycle. While disabled the
-  // load is still measured but the operator's override is returned and the controller idles.
+  // feed_mm_min. Returns the override (%) to apply from the next cycle. While cutting it is
+  // the controller's output times the operator's override (spec 04: they combine; at 100 %
+  // operator override it is the controller's output), at most max_override_pct. Below lm,
+  // and while disabled, it is the operator's override; the load is still measured.
   double cycle(double t_s, double path_s_mm, double feed_mm_min,
                double operator_override_pct) noexcept;
 
@@ -43,6 +45,8 @@ class AdaptiveFeedLoop {
   std::uint32_t cycles_to_control_ = 0;  // 0: the controller runs at this cycle
   double last_load_pct_ = 0;
   double override_pct_ = 100;
+  double adaptive_pct_ = 100;  // the controller's last output
+  double max_override_pct_ = 200;
   double path_s_mm_ = 0;
   bool have_position_ = false;
   AxisVec last_position_{};

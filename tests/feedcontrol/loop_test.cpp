@@ -79,14 +79,28 @@ TEST(Loop, ControlEveryNCyclesButIdlePassThroughAtOnce) {
   for (int n = 5; n < 12; ++n) loop.cycle(n * 0.001, 0, 0, 70);  // 90 % measured from n = 10
   // Control cycles at n = 8 (idle) and n = 12: the first active one.
   const double first = loop.cycle(0.012, 0, 0, 70);
-  // e = −30, Δt = 4 ms: o = Kp·e + Ki·e·Δt + c = −30 − 0.6 + 100 = 69.4.
-  EXPECT_NEAR(first, 69.4, 1e-9);
-  // Held until the next control cycle although the operator's override changes.
-  EXPECT_DOUBLE_EQ(loop.cycle(0.013, 0, 0, 50), first);
-  EXPECT_DOUBLE_EQ(loop.cycle(0.014, 0, 0, 50), first);
-  EXPECT_DOUBLE_EQ(loop.cycle(0.015, 0, 0, 50), first);
-  // Next control cycle: I = 2·(−30·0.004) → o = −30 − 1.2 + 100 = 68.8.
-  EXPECT_NEAR(loop.cycle(0.016, 0, 0, 50), 68.8, 1e-9);
+  // e = −30, Δt = 4 ms: o = Kp·e + Ki·e·Δt + c = −30 − 0.6 + 100 = 69.4, times the operator's
+  // 70 % (spec 04: the two combine).
+  EXPECT_NEAR(first, 69.4 * 0.70, 1e-9);
+  // The controller's output is held until its next cycle; the operator's knob acts at once.
+  EXPECT_NEAR(loop.cycle(0.013, 0, 0, 70), first, 1e-12);
+  EXPECT_NEAR(loop.cycle(0.014, 0, 0, 50), 69.4 * 0.50, 1e-9);
+  EXPECT_NEAR(loop.cycle(0.015, 0, 0, 50), 69.4 * 0.50, 1e-9);
+  // Next control cycle: I = 2·(−30·0.004) → o = −30 − 1.2 + 100 = 68.8; the controller's own
+  // factor does not depend on the operator's override.
+  EXPECT_NEAR(loop.cycle(0.016, 0, 0, 50), 68.8 * 0.50, 1e-9);
+}
+
+TEST(Loop, CombinedOverrideStaysWithinTheMachinesMaximum) {
+  // A light cut (20 % < target 60 %) drives the controller up to its upper limit; with the
+  // operator at 150 % the product is capped at the machine's 200 %.
+  auto rec = RecordedLoad::parse("t_s,load_pct\n0,20\n", "load.csv");
+  AdaptiveFeedLoop loop(settings(), 0.001, 200, rec);
+  double out = 0;
+  for (int n = 0; n < 4000; ++n) out = loop.cycle(n * 0.001, 0, 0, 150);
+  EXPECT_GT(loop.controller().state().output_pct, 200.0 / 1.5);
+  EXPECT_DOUBLE_EQ(out, 200);
+  EXPECT_NEAR(loop.cycle(4.0, 0, 0, 50), loop.controller().state().output_pct * 0.5, 1e-9);
 }
 
 TEST(Loop, InvalidSettingsAreRejectedAtConstruction) {
