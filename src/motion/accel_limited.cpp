@@ -55,7 +55,14 @@
 //    with r < 1 the decrement is ≤ r·A0 ((1/2 − r)² ≤ 1/4). The step that reaches the stop is
 //    clipped to land on it (≤ A0: P4's arrival at ≤ Amax·τ), so the last sample is the stop.
 //
-// 4. Forward pass = the cycle:  u = min(u_prev + r·A0, caps active, B(min K), stop bound).
+//    Caps of V ≥ A0 (and corner caps ≥ A0/2 on long segments with r ≥ 1/2) use the lattice
+//    key instead, K = (V − A0/2)² + 2·A0·σ(c), x ≤ √(K − 2·A0·σ(s)) − A0/2: following it the steps
+//    are exactly x, x − A0, …, and a step landing at or after c has (x − A0/2)² ≤ (V − A0/2)², so
+//    x ≤ V. Its bound is V at c − V and may reach 0 just before c when V < A0 (the last lattice
+//    step can be larger than V and then lands short of c), so such a cap is active from c − V.
+//
+// 4. Forward pass = the cycle:  u = min(u_prev + r·A0, caps active, B(min K), stop bound);
+//    while a corner cap is active the speed does not rise (the turn uses the axis budget).
 //
 // 5. Feed caps and the override. A feed cap's V is OR·F and OR may change at any cycle, so its
 //    key K = (OR·F)² + 2A0σ(c) depends on OR. We keep one key tree per override *level*
