@@ -8,7 +8,10 @@ CNCORE := $(BUILD)/src/app/cncore
 DEB_PACKAGES := cmake ninja-build g++ make pkg-config \
   libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev libfast-float-dev \
   libmuparser-dev libgtest-dev libgmock-dev libbenchmark-dev librapidcheck-dev libpng-dev time \
-  nodejs npm chromium
+  chromium
+# Node.js and npm (uPlot for the HTML report) come from Debian only when no `npm` is on the PATH:
+# a machine with Node.js from elsewhere has its own npm, which Debian's package conflicts with.
+NODE_PACKAGES := nodejs npm
 
 .PHONY: all deps configure build test demo bench format clean fuzz test-sanitize
 
@@ -18,6 +21,7 @@ deps:
 	@missing=""; for p in $(DEB_PACKAGES); do \
 	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
 	done; \
+	command -v npm >/dev/null 2>&1 || missing="$$missing $(NODE_PACKAGES)"; \
 	if [ -n "$$missing" ]; then \
 	  echo "installing:$$missing"; \
 	  SUDO=""; [ "$$(id -u)" -eq 0 ] || SUDO=sudo; \
