@@ -182,9 +182,9 @@ struct RunArgs {
   std::optional<double> override_pct;
   std::vector<std::string> override_at, vars, params;
   std::string correction;  // --correction on|off; empty: [direction_correction] enabled
-  std::string report;    // --report FILE.html
-  std::string adaptive;  // --adaptive on|off; empty: adaptive.enabled of the configuration
-  std::string load_csv;  // --load FILE.csv
+  std::string report;      // --report FILE.html
+  std::string adaptive;    // --adaptive on|off; empty: adaptive.enabled of the configuration
+  std::string load_csv;    // --load FILE.csv
   std::string heightmap, heightmap_grid;  // cutting simulation: --heightmap, --heightmap-grid
 };
 
@@ -214,8 +214,8 @@ int command_run(const RunArgs& a) {
   sim::RunOptions options;
   options.kernel.mode = a.mode == "stop" ? motion::Mode::kStop : motion::Mode::kLookahead;
   options.kernel.bound_resultant_accel = machine.bound_resultant_accel;
-  const bool accel_type = a.accdec.empty() ? machine.accdec == AccDecKind::kAcceleration
-                                           : a.accdec == "acceleration";
+  const bool accel_type =
+      a.accdec.empty() ? machine.accdec == AccDecKind::kAcceleration : a.accdec == "acceleration";
   options.kernel.accdec =
       accel_type ? motion::AccDecType::kAcceleration : motion::AccDecType::kMovingAverage;
   if (a.override_pct) {
@@ -247,8 +247,9 @@ int command_run(const RunArgs& a) {
   if (machine.cutting.stock.enabled) {
     cutting.emplace(machine, a.program);
   } else if (!a.heightmap.empty() || !a.heightmap_grid.empty()) {
-    throw UsageError("--heightmap and --heightmap-grid need a [stock] section in the machine "
-                     "configuration (docs/cutting-simulation.md)");
+    throw UsageError(
+        "--heightmap and --heightmap-grid need a [stock] section in the machine "
+        "configuration (docs/cutting-simulation.md)");
   }
   feed::LoadSource* load_source = load.source.get();
   std::string load_description = load.description;
@@ -528,6 +529,10 @@ int command_table(const TableArgs& a) {
                                      : tables::CancelMode::kClear;
   options.settings.slow_to_fit = machine.table_slow_to_fit;
   options.cyclic_repeats = a.repeat;
+  // Values from the configuration first; the command line overrides them number by number.
+  options.values.params = machine.table_parameters;
+  options.values.macros = machine.table_variables;
+  options.values.signals = machine.table_signals;
   for (const std::string& p : a.params) {
     const auto [n, v] = numbered_value("--param", p, 'P');
     options.values.params[n] = v;
@@ -583,8 +588,8 @@ int command_table(const TableArgs& a) {
   } else {
     // 0 = not given: default_reference reports the REF line when a spindle or master speed is
     // needed and missing.
-    options.reference = tables::default_reference(
-        tabs.front(), machine, a.spindle_rpm.value_or(0), a.master_speed_mm_min.value_or(0));
+    options.reference = tables::default_reference(tabs.front(), machine, a.spindle_rpm.value_or(0),
+                                                  a.master_speed_mm_min.value_or(0));
   }
   const tables::TablePlan plan = tables::plan_tables(std::move(tabs), machine, options);
   if (a.print_effective) std::cout << tables::format_effective(plan) << std::flush;

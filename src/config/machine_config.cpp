@@ -6,6 +6,7 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -211,6 +212,23 @@ void read_tables(const Reader& r, const toml::table& t, MachineConfig& c) {
       }
     } else if (k == "slow_to_fit") {
       c.table_slow_to_fit = r.boolean(key, node, name);
+    } else if (k == "parameters" || k == "variables" || k == "signals") {
+      std::map<int, double>& values = k == "parameters"  ? c.table_parameters
+                                      : k == "variables" ? c.table_variables
+                                                         : c.table_signals;
+      for (const auto& [number_key, value] : r.table(key, node, name)) {
+        const std::string_view text = number_key.str();
+        int number = -1;
+        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), number);
+        if (ec != std::errc() || end != text.data() + text.size() || number < 0) {
+          r.fail(number_key.source(),
+                 fmt::format("{}: key '{}' must be a number >= 0 (the n of {}<n>)", name, text,
+                             k == "parameters"  ? "P"
+                             : k == "variables" ? "#"
+                                                : "R"));
+        }
+        values[number] = r.number(number_key, value, fmt::format("{}.{}", name, text));
+      }
     } else {
       r.unknown(key, name);
     }
@@ -334,8 +352,9 @@ CorrectionLaw read_correction_law(const Reader& r, const toml::key& key, const t
   }
   const auto* arr = node.as_array();
   if (arr == nullptr || arr->empty()) {
-    r.fail(key.source(),
-           fmt::format("{} must be a formula in FI, F, D (a string) or a table [[FI, C], ...]", name));
+    r.fail(
+        key.source(),
+        fmt::format("{} must be a formula in FI, F, D (a string) or a table [[FI, C], ...]", name));
   }
   for (const toml::node& item : *arr) {
     const auto* pair = item.as_array();
@@ -352,7 +371,9 @@ CorrectionLaw read_correction_law(const Reader& r, const toml::key& key, const t
       }
       ok = ok && std::isfinite(p[i]);
     }
-    if (!ok) r.fail(item.source(), fmt::format("{}: every table entry must be [FI, C] (two numbers)", name));
+    if (!ok)
+      r.fail(item.source(),
+             fmt::format("{}: every table entry must be [FI, C] (two numbers)", name));
     if (p[0] < -1 || p[0] > 1) {
       r.fail(item.source(), fmt::format("{}: FI = {} is outside [-1, 1]", name, p[0]));
     }
@@ -361,30 +382,31 @@ CorrectionLaw read_correction_law(const Reader& r, const toml::key& key, const t
                                         name, p[0], law.table.back()[0]));
     }
     if (!(p[1] > 0)) {
-      r.fail(item.source(), fmt::format("{}: C = {} at FI = {}: the coefficient must be > 0", name,
-                                        p[1], p[0]));
+      r.fail(item.source(),
+             fmt::format("{}: C = {} at FI = {}: the coefficient must be > 0", name, p[1], p[0]));
     }
     law.table.push_back(p);
   }
   return law;
 }
 
-void check_correction_law(const Reader& r, const toml::source_region& where, const CorrectionLaw& law,
-                          const std::string& name, double fi_lo, double fi_hi,
-                          const MachineConfig& c) {
+void check_correction_law(const Reader& r, const toml::source_region& where,
+                          const CorrectionLaw& law, const std::string& name, double fi_lo,
+                          double fi_hi, const MachineConfig& c) {
   std::optional<BadCoefficient> bad;
   try {
     bad = find_bad_coefficient(law, fi_lo, fi_hi, c.max_feed_mm_min,
                                c.direction_correction.tool_diameter_mm);
   } catch (const CorrectionLawError& e) {
-    r.fail(where, fmt::format("{}: formula \"{}\" cannot be evaluated: {}", name, law.formula,
-                              e.what()));
+    r.fail(where,
+           fmt::format("{}: formula \"{}\" cannot be evaluated: {}", name, law.formula, e.what()));
   }
   if (bad) {
-    r.fail(where, fmt::format("{}: C = {} at FI = {} (F = {} mm/min, D = {} mm): the coefficient "
-                              "must be finite and > 0 for every FI in [{}, {}]",
-                              name, std::isnan(bad->c) ? std::string("NaN") : num(bad->c), bad->fi, bad->feed_mm_min,
-                              c.direction_correction.tool_diameter_mm, fi_lo, fi_hi));
+    r.fail(where,
+           fmt::format("{}: C = {} at FI = {} (F = {} mm/min, D = {} mm): the coefficient "
+                       "must be finite and > 0 for every FI in [{}, {}]",
+                       name, std::isnan(bad->c) ? std::string("NaN") : num(bad->c), bad->fi,
+                       bad->feed_mm_min, c.direction_correction.tool_diameter_mm, fi_lo, fi_hi));
   }
 }
 
@@ -607,13 +629,30 @@ std::string machine_config_to_toml(const MachineConfig& c) {
        "SFTCAN: \"clear\" = later rows use their written L values; \"rebase\" = gaps stay shifted");
   line(fmt::format("slow_to_fit = {}", c.table_slow_to_fit),
        "a table over an axis limit: false = refused; true = reference slowed to fit");
+  const std::pair<const char*, const std::map<int, double>*> table_values[] = {
+      {"parameters", &c.table_parameters},
+      {"variables", &c.table_variables},
+      {"signals", &c.table_signals}};
+  for (const auto& [section, values] : table_values) {
+    if (values->empty()) {
+      o += fmt::format("# [tables.{}]  # for SFT={}<n>; e.g. {} = -200\n", section,
+                       section[0] == 'p'   ? "P"
+                       : section[0] == 'v' ? "#"
+                                           : "R",
+                       section[0] == 's' ? "1001" : "501");
+      continue;
+    }
+    o += fmt::format("[tables.{}]\n", section);
+    for (const auto& [n, v] : *values) o += fmt::format("{} = {}\n", n, num(v));
+  }
 
   const DirectionCorrectionConfig& dc = c.direction_correction;
   o += "\n# Feed correction by direction of motion (spec 03, docs/direction-correction.md).\n"
        "# FI = (unit direction of the move) · direction, in [-1, 1]: +1 along it, -1 against it.\n"
        "# The feed of every G1/G2/G3 becomes F·C(FI) (arcs and helices per sub-arc, following the\n"
        "# tangent); G0 is not corrected. A law is a muParser formula in FI, F (programmed feed,\n"
-       "# mm/min) and D (tool diameter, mm), or a table [[FI, C], ...] (linear between points, flat\n"
+       "# mm/min) and D (tool diameter, mm), or a table [[FI, C], ...] (linear between points, "
+       "flat\n"
        "# outside). Checked at load: C must be finite and > 0 over its FI range. In a program,\n"
        "# M160 turns the correction on and M161 off (until the other or the program end).\n";
   o += "[direction_correction]\n";

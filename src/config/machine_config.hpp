@@ -4,11 +4,12 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <string_view>
 
-#include "config/cutting_config.hpp"
 #include "config/correction_law.hpp"
+#include "config/cutting_config.hpp"
 #include "core/geometry.hpp"
 #include "feedcontrol/settings.hpp"
 
@@ -50,9 +51,9 @@ enum class CorrectionOverrideMode : std::uint8_t {
 // FI = (unit direction of motion) · direction, in [−1, 1]; C = uphill(FI) for FI ≥ 0, downhill(FI)
 // for FI < 0; the programmed feed of every G1/G2/G3 becomes F·C (arcs: per sub-arc).
 struct DirectionCorrectionConfig {
-  bool enabled = false;          // the seed's on/off parameter (off: the run is unchanged)
-  bool active_at_start = true;   // on from the program start (M160 / M161 switch it)
-  Vec3 direction{0, 0, 1};       // unit vector (Z by default; e.g. the tool axis)
+  bool enabled = false;         // the seed's on/off parameter (off: the run is unchanged)
+  bool active_at_start = true;  // on from the program start (M160 / M161 switch it)
+  Vec3 direction{0, 0, 1};      // unit vector (Z by default; e.g. the tool axis)
   CorrectionLaw uphill{"1 + 0.5*FI", {}};    // FI ≥ 0, C ≥ 1 in the seed
   CorrectionLaw downhill{"1 + 0.5*FI", {}};  // FI < 0, C < 1 in the seed
   CorrectionOverrideMode override_mode = CorrectionOverrideMode::kMultiply;
@@ -80,7 +81,7 @@ struct MachineConfig {
   // of them separately (false, the seed's way: the resultant may reach √2·Amax).
   bool bound_resultant_accel = false;
   AccDecKind accdec = AccDecKind::kMovingAverage;  // look-ahead acc/dec type
-  std::array<double, kMaxAxes> start_position{};  // position at program start ([axes.x] start_mm)
+  std::array<double, kMaxAxes> start_position{};   // position at program start ([axes.x] start_mm)
 
   // [axes.x] ...
   std::array<AxisConfig, kMaxAxes> axes{};
@@ -94,6 +95,9 @@ struct MachineConfig {
   // A table that would exceed an axis limit: false → refused; true → the reference is slowed
   // by one constant factor so that it fits.
   bool table_slow_to_fit = false;
+  // [tables.parameters], [tables.variables], [tables.signals]: values of P<n>, #<n> and R<n>
+  // for indirect SFT amounts (the command line's --param/--var/--signal override them).
+  std::map<int, double> table_parameters, table_variables, table_signals;
 
   // [direction_correction] (spec 03)
   DirectionCorrectionConfig direction_correction;

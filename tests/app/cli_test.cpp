@@ -656,3 +656,39 @@ TEST_F(Cli, TableMasterAxisMovedByAPartProgramAndMCodesFire) {
   write(dir_ / "time.tbl", "REF TIME\nAXES X\nL1000 X10\n");
   EXPECT_EQ(run("table time.tbl --master-program master.ngc").code, 2);
 }
+
+TEST_F(Cli, TableAmountsFromTheMachineConfigurationAndTheCommandLineOverridesThem) {
+  write(dir_ / "m.toml",
+        "[tables.parameters]\n5 = -300\n[tables.variables]\n501 = -200\n"
+        "[tables.signals]\n1001 = -400\n");
+  write(dir_ / "all.tbl",
+        "REF TIME\nAXES X\nL1000 X10\nL2000 X20 SFT=P5\nL3000 X30 SFT=#501\n"
+        "L4000 X40 SFT=R1001\nL5000 X50\n");
+  // Shifts accumulate: −300 from row 4, −500 from row 5, −900 from row 6.
+  const Result r = run("table all.tbl --machine m.toml --trajectory a.csv");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = read_csv(dir_ / "a.csv");
+  EXPECT_NEAR(time_reaching(rows, "x", 20), 1.7, 1e-9);
+  EXPECT_NEAR(time_reaching(rows, "x", 30), 2.5, 1e-9);
+  EXPECT_NEAR(time_reaching(rows, "x", 40), 3.1, 1e-9);
+  EXPECT_NEAR(time_reaching(rows, "x", 50), 4.1, 1e-9);
+  // The command line overrides one value and keeps the others.
+  const Result o = run("table all.tbl --machine m.toml --var 501=0 --trajectory o.csv");
+  ASSERT_EQ(o.code, 0) << o.err;
+  const auto orows = read_csv(dir_ / "o.csv");
+  EXPECT_NEAR(time_reaching(orows, "x", 30), 2.7, 1e-9);
+  EXPECT_NEAR(time_reaching(orows, "x", 50), 4.3, 1e-9);
+  // The printed configuration reads back with the values.
+  const Result printed = run("machine --machine m.toml");
+  ASSERT_EQ(printed.code, 0) << printed.err;
+  EXPECT_NE(printed.out.find("[tables.variables]\n501 = -200\n"), std::string::npos) << printed.out;
+  write(dir_ / "again.toml", printed.out);
+  const Result again = run("table all.tbl --machine again.toml --trajectory b.csv");
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_EQ(slurp(dir_ / "b.csv"), slurp(dir_ / "a.csv"));
+  // A key that is not a number: FILE:LINE:COL naming it.
+  write(dir_ / "bad.toml", "[tables.parameters]\nP5 = -300\n");
+  const Result bad = run("table all.tbl --machine bad.toml");
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_EQ(bad.err.rfind("bad.toml:2:1: error: tables.parameters: key 'P5'", 0), 0u) << bad.err;
+}
