@@ -404,10 +404,11 @@ std::string format_human_summary(const Summary& s, const MachineConfig& machine,
   }
   if (s.load.present) {
     const LoadSummary& l = s.load;
-    o += fmt::format("spindle load  peak {:.1f} %, mean {:.1f} %, above target {:.0f} %: {:.3f} s "
-                     "(+5 %: {:.3f} s); source: {}\n",
-                     l.peak_load_pct, l.mean_load_pct, l.target_load_pct, l.time_above_target_s,
-                     l.time_above_target_band_s, l.source);
+    o += fmt::format(
+        "spindle load  peak {:.1f} %, mean {:.1f} %, above target {:.0f} %: {:.3f} s "
+        "(+5 %: {:.3f} s); source: {}\n",
+        l.peak_load_pct, l.mean_load_pct, l.target_load_pct, l.time_above_target_s,
+        l.time_above_target_band_s, l.source);
     if (l.adaptive) {
       o += fmt::format("adaptive feed {} ({} M52), time saved {:.3f} s: {:.3f} s without it\n",
                        l.antiwindup, l.switches, l.time_saved_s, l.time_without_adaptive_s);

@@ -47,9 +47,9 @@ struct LoadSummary {
   double time_above_target_band_s = 0;  // load > load_target + kBandPct
   static constexpr double kBandPct = 5;
   // Set by the caller (cncore run):
-  bool adaptive = false;               // the controller ran (enabled at start, or by M52 P1)
-  std::string antiwindup;              // adaptive.antiwindup
-  std::string source;                  // "plant model", "recorded FILE"
+  bool adaptive = false;   // the controller ran (enabled at start, or by M52 P1)
+  std::string antiwindup;  // adaptive.antiwindup
+  std::string source;      // "plant model", "recorded FILE"
   double target_load_pct = 0;
   double time_without_adaptive_s = 0;  // the same run again with the operator's override only
   double time_saved_s = 0;             // time_without_adaptive_s − cycle_time_s

@@ -69,7 +69,7 @@ struct Segment {
   std::uint32_t dwell_cycles = 0;
   char aux_letter = 0;
   double aux_value = 0;
-  double aux_p = 0;  // Block::aux_p
+  double aux_p = 0;   // Block::aux_p
   bool done = false;  // event handled (set by the interpolator)
 
   double end_mm() const { return s0_mm + length_mm; }
