@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "files.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -23,18 +25,8 @@ struct Result {
   std::string out, err;
 };
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (const char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
+using cncore::testing::slurp;
+constexpr auto quote = cncore::testing::shell_quote;
 
 const char* kMill = R"([stock]
 min_mm = [-30, -30, -20]

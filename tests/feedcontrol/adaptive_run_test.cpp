@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "config/machine_config.hpp"
+#include "files.hpp"
 #include "program_blocks.hpp"
 #include "scenario.hpp"
 #include "trajectory.hpp"
@@ -34,17 +35,8 @@ struct Result {
   std::string out, err;
 };
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-void write(const fs::path& p, const std::string& text) {
-  std::ofstream f(p, std::ios::binary);
-  f << text;
-}
+using cncore::testing::slurp;
+constexpr auto write = cncore::testing::write_file;
 
 // Columns by name; an empty field is NaN.
 struct Csv {

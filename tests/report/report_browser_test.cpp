@@ -15,22 +15,14 @@
 #include <sstream>
 #include <string>
 
+#include "files.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (const char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
+using cncore::testing::slurp;
+constexpr auto quote = cncore::testing::shell_quote;
 
 int shell(const std::string& cmd) {
   const int rc = std::system(cmd.c_str());
