@@ -6,6 +6,7 @@
 #include <limits>
 #include <string_view>
 
+#include "config/toml_reader.hpp"
 #include "core/error.hpp"
 
 namespace cncore::config_detail {
@@ -14,31 +15,17 @@ namespace {
 
 [[noreturn]] void fail(const std::string& file, const toml::source_region& where,
                        const std::string& message) {
-  throw InputError(file, static_cast<std::uint32_t>(where.begin.line),
-                   static_cast<std::uint32_t>(where.begin.column), message);
+  TomlReader(file).fail(where, message);
 }
 
 double number(const std::string& file, const toml::source_region& where, const toml::node& node,
               const std::string& name) {
-  if (const auto* f = node.as_floating_point()) {
-    if (!std::isfinite(f->get()))
-      fail(file, where, fmt::format("{} must be a finite number", name));
-    return f->get();
-  }
-  if (const auto* i = node.as_integer()) return static_cast<double>(i->get());
-  fail(file, where, fmt::format("{} must be a number", name));
+  return TomlReader(file).number_at(where, node, name);
 }
 
 std::int64_t integer_in(const std::string& file, const toml::key& key, const toml::node& node,
                         const std::string& name, std::int64_t lo, std::int64_t hi) {
-  const auto* i = node.as_integer();
-  if (i == nullptr) fail(file, key.source(), fmt::format("{} must be an integer", name));
-  if (i->get() < lo || i->get() > hi) {
-    fail(file, key.source(),
-         fmt::format("{} = {} is out of range: it must be between {} and {}", name, i->get(), lo,
-                     hi));
-  }
-  return i->get();
+  return TomlReader(file).integer_in(key, node, name, lo, hi);
 }
 
 // depth = [[s_mm, depth_mm], ...]: each point checked where it is written.

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "config/cutting_config_toml.hpp"
+#include "config/toml_reader.hpp"
 #include "core/error.hpp"
 
 namespace cncore {
@@ -42,63 +43,12 @@ std::string material_names() {
   return s;
 }
 
-class CutReader {
- public:
-  explicit CutReader(const std::string& file) : file_(file) {}
+using CutReader = config_detail::TomlReader;
 
-  [[noreturn]] void fail(const toml::source_region& where, const std::string& message) const {
-    throw InputError(file_, static_cast<std::uint32_t>(where.begin.line),
-                     static_cast<std::uint32_t>(where.begin.column), message);
-  }
-  double number(const toml::key& key, const toml::node& node, const std::string& name) const {
-    if (const auto* f = node.as_floating_point()) {
-      const double v = f->get();
-      if (!std::isfinite(v)) fail(key.source(), fmt::format("{} must be a finite number", name));
-      return v;
-    }
-    if (const auto* i = node.as_integer()) return static_cast<double>(i->get());
-    fail(key.source(), fmt::format("{} must be a number", name));
-  }
-  double positive(const toml::key& key, const toml::node& node, const std::string& name,
-                  const char* unit) const {
-    const double v = number(key, node, name);
-    if (v <= 0) fail(key.source(), fmt::format("{} = {} must be > 0 {}", name, v, unit));
-    return v;
-  }
-  std::uint32_t count(const toml::key& key, const toml::node& node, const std::string& name,
-                      std::int64_t lo, std::int64_t hi) const {
-    const auto* i = node.as_integer();
-    if (i == nullptr) fail(key.source(), fmt::format("{} must be an integer", name));
-    if (i->get() < lo || i->get() > hi) {
-      fail(key.source(), fmt::format("{} = {} is out of range: it must be between {} and {}", name,
-                                     i->get(), lo, hi));
-    }
-    return static_cast<std::uint32_t>(i->get());
-  }
-  std::string text(const toml::key& key, const toml::node& node, const std::string& name) const {
-    const auto* s = node.as_string();
-    if (s == nullptr) fail(key.source(), fmt::format("{} must be a string", name));
-    return s->get();
-  }
-  // [x, y, z] of finite numbers.
-  std::array<double, 3> triple(const toml::key& key, const toml::node& node,
-                               const std::string& name) const {
-    const auto* a = node.as_array();
-    if (a == nullptr || a->size() != 3) {
-      fail(key.source(), fmt::format("{} must be an array of 3 numbers [x, y, z]", name));
-    }
-    std::array<double, 3> v{};
-    for (std::size_t i = 0; i < 3; ++i) v[i] = number(key, *a->get(i), name);
-    return v;
-  }
-  [[noreturn]] void unknown(const toml::key& key, const std::string& name,
-                            const std::string& known) const {
-    fail(key.source(), fmt::format("unknown key '{}' (keys here: {})", name, known));
-  }
-
- private:
-  const std::string& file_;
-};
+// The list of keys a section accepts, for the "unknown key" error.
+std::string keys_here(const char* keys) {
+  return fmt::format(" (keys here: {})", keys);
+}
 
 void read_stock(const CutReader& r, const toml::key& section, const toml::table& t,
                 StockConfig& s) {
@@ -129,7 +79,7 @@ void read_stock(const CutReader& r, const toml::key& section, const toml::table&
       cap_at = key.source();
       cap_given = true;
     } else {
-      r.unknown(key, name, "min_mm, size_mm, cell_mm, max_memory_mb");
+      r.unknown(key, name, keys_here("min_mm, size_mm, cell_mm, max_memory_mb"));
     }
   }
   if (s.size_mm[0] <= 0 || s.size_mm[1] <= 0 || s.size_mm[2] <= 0) {
@@ -183,7 +133,7 @@ ToolSpec read_tool(const CutReader& r, const toml::source_region& at, const toml
     } else if (k == "flutes") {
       tool.flutes = r.count(key, node, name, 1, 100);
     } else {
-      r.unknown(key, name, "number, type, diameter_mm, corner_radius_mm, flutes");
+      r.unknown(key, name, keys_here("number, type, diameter_mm, corner_radius_mm, flutes"));
     }
   }
   if (!have_number) r.fail(at, prefix + "number is required (the T word that selects the tool)");
@@ -255,7 +205,8 @@ bool read_cutting_section(const std::string& file, const toml::key& key, const t
         c.load_window_s = r.positive(ck, cn, name, "s");
         if (c.load_window_s > 10) r.fail(ck.source(), name + " must be <= 10 s");
       } else {
-        r.unknown(ck, name, "material, kc_n_mm2, spindle_power_kw, default_tool, load_window_s");
+        r.unknown(ck, name,
+                  keys_here("material, kc_n_mm2, spindle_power_kw, default_tool, load_window_s"));
       }
     }
     return true;

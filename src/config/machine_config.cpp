@@ -16,6 +16,7 @@
 
 #include "config/adaptive_section.hpp"
 #include "config/cutting_config_toml.hpp"
+#include "config/toml_reader.hpp"
 #include "core/error.hpp"
 
 namespace cncore {
@@ -75,72 +76,7 @@ AxisKeyNames axis_key_names(bool rotary) {
 }
 
 // Reads and validates one table after the other; every error points at the key.
-class Reader {
- public:
-  explicit Reader(const std::string& file) : file_(file) {}
-
-  [[noreturn]] void fail(const toml::source_region& where, const std::string& message) const {
-    throw InputError(file_, static_cast<std::uint32_t>(where.begin.line),
-                     static_cast<std::uint32_t>(where.begin.column), message);
-  }
-
-  double number(const toml::key& key, const toml::node& node, const std::string& name) const {
-    if (const auto* f = node.as_floating_point()) {
-      const double v = f->get();
-      if (!std::isfinite(v)) fail(key.source(), fmt::format("{} must be a finite number", name));
-      return v;
-    }
-    if (const auto* i = node.as_integer()) return static_cast<double>(i->get());
-    fail(key.source(), fmt::format("{} must be a number", name));
-  }
-
-  bool boolean(const toml::key& key, const toml::node& node, const std::string& name) const {
-    if (const auto* b = node.as_boolean()) return b->get();
-    fail(key.source(), fmt::format("{} must be true or false", name));
-  }
-
-  std::int64_t integer(const toml::key& key, const toml::node& node,
-                       const std::string& name) const {
-    if (const auto* i = node.as_integer()) return i->get();
-    fail(key.source(), fmt::format("{} must be an integer", name));
-  }
-
-  // lo < v ≤ hi (lo_open) or lo ≤ v ≤ hi.
-  double number_in(const toml::key& key, const toml::node& node, const std::string& name, double lo,
-                   bool lo_open, double hi, const char* unit) const {
-    const double v = number(key, node, name);
-    if ((lo_open ? v <= lo : v < lo) || v > hi) {
-      fail(key.source(), fmt::format("{} = {} is out of range: it must be {} {} and <= {} {}", name,
-                                     v, lo_open ? ">" : ">=", lo, hi, unit));
-    }
-    return v;
-  }
-
-  std::int64_t integer_in(const toml::key& key, const toml::node& node, const std::string& name,
-                          std::int64_t lo, std::int64_t hi) const {
-    const std::int64_t v = integer(key, node, name);
-    if (v < lo || v > hi) {
-      fail(key.source(),
-           fmt::format("{} = {} is out of range: it must be between {} and {}", name, v, lo, hi));
-    }
-    return v;
-  }
-
-  const toml::table& table(const toml::key& key, const toml::node& node,
-                           const std::string& name) const {
-    const auto* t = node.as_table();
-    if (t == nullptr) fail(key.source(), fmt::format("{} must be a table", name));
-    return *t;
-  }
-
-  [[noreturn]] void unknown(const toml::key& key, const std::string& name,
-                            const std::string& hint = {}) const {
-    fail(key.source(), fmt::format("unknown key '{}'{}", name, hint));
-  }
-
- private:
-  const std::string& file_;
-};
+using Reader = config_detail::TomlReader;
 
 void read_motion(const Reader& r, const toml::table& t, MachineConfig& c) {
   for (const auto& [key, node] : t) {
