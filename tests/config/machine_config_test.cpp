@@ -204,6 +204,13 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"[axes]\n", 1, 2, "at least one axis"},
         BadCase{"[axes.x]\nmin_mm = 0\n[axes.x.foo]\n", 3, 9, "axes.x.foo"},
         BadCase{"name = 3\n", 1, 1, "name"},
+        // The cutting and adaptive sections read through the same TomlReader.
+        BadCase{"[stock]\nsize_mm = [1, 2, 3]\ncolour = 1\n", 3, 1, "(keys here: min_mm,"},
+        BadCase{"[stock]\nsize_mm = [1, 2]\n", 2, 1, "stock.size_mm must be an array of 3"},
+        BadCase{"[[tools]]\nnumber = -1\n", 2, 1, "between 0 and 1000000000"},
+        BadCase{"[cutting]\nspindle_power_kw = 0\n", 2, 1, "must be > 0 kW"},
+        BadCase{"[adaptive.plant]\nseed = 1.5\n", 2, 1, "adaptive.plant.seed must be an integer"},
+        BadCase{"[adaptive.plant]\nbase_pct = inf\n", 2, 1, "must be a finite number"},
         // TOML syntax errors: position of the error, message says so.
         BadCase{"[motion]\nperiod_s = = 1\n", 2, 12, "TOML syntax"},
         BadCase{"[motion\n", 1, 8, "TOML syntax"}),
