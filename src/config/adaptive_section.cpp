@@ -163,7 +163,7 @@ void read_adaptive_section(const std::string& file, const toml::key& section,
       const auto* s = value.as_string();
       const auto policy = s != nullptr ? feed::parse_antiwindup(s->get()) : std::nullopt;
       if (!policy) {
-        fail(file, key.source(), name + " must be \"none\", \"clamp\" or \"back_calculation\"");
+        fail(file, key.source(), name + R"( must be "none", "clamp" or "back_calculation")");
       }
       a.antiwindup = *policy;
     } else if (k == "control_cycles") {
@@ -216,7 +216,7 @@ std::string adaptive_section_to_toml(const MachineConfig& c) {
   line("upper_pct = " + num(a.upper_pct), "ot: upper override limit, % (> lower, <= max_override)");
   line("lower_pct = " + num(a.lower_pct), "lower override limit, % (>= 0)");
   line(fmt::format("antiwindup = \"{}\"", feed::antiwindup_name(a.antiwindup)),
-       "\"back_calculation\" (seed), \"clamp\" (overwrite) or \"none\"");
+       R"("back_calculation" (seed), "clamp" (overwrite) or "none")");
   line("control_cycles = " + std::to_string(a.control_cycles),
        "control period in interpolation periods (1 … 1000000)");
 
