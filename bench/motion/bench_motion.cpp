@@ -1,143 +1,399 @@
-// Motion-kernel throughput (issue 3, spec 01 P7): interpolation cycles per second without any
-// trajectory output, the worst single cycle with a 10 000-block look-ahead window, and the same
-// path cut into 100× finer segments (the cost per cycle must not grow with segment count).
+// Motion-kernel speed (issue 3, spec 01 P7): interpolation cycles per second without any
+// trajectory output, per-cycle latency percentiles and the worst single cycle with a
+// 10 000-block look-ahead window, on `ugs/stress_test.gcode` and the same path cut into 100×
+// finer segments, and the kernel's memory against program length.
+//
+// Every program is interpreted before the clock starts (the kernel is fed pre-interpreted
+// Blocks); what the kernel does with a block (segment construction, joint speed, look-ahead
+// points) is part of Kernel::push and is included where a figure says "incl. push".
+// Kernel construction (allocating and touching its buffers) is never timed.
+//
+// Extra flags (before the Google Benchmark ones): --shared DIR (corpus root, default the CMake
+// cache's CNCORE_SHARED_DIR), --mlock (mlockall(MCL_CURRENT | MCL_FUTURE) before measuring),
+// --histogram (print the per-cycle latency histograms to stderr).
 #include <benchmark/benchmark.h>
-#include <time.h>
+#include <sys/mman.h>
+#include <x86intrin.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
-#include <random>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <new>
+#include <sstream>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "config/machine_config.hpp"
 #include "core/block.hpp"
+#include "core/error.hpp"
+#include "interpreter/interpreter.hpp"
 #include "motion/kernel.hpp"
+#include "program_gen.hpp"
+
+// Heap accounting: every operator new in the process is counted, so a run can show that the
+// kernel allocates only at construction (and how much) and never while it runs.
+namespace {
+std::uint64_t g_allocs = 0;
+std::uint64_t g_alloc_bytes = 0;
+}  // namespace
+
+void* operator new(std::size_t n) {
+  ++g_allocs;
+  g_alloc_bytes += n;
+  if (void* p = std::malloc(n != 0 ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t n) {
+  return operator new(n);
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  std::free(p);
+}
 
 namespace {
 
 using namespace cncore;
 
-MachineConfig machine() {
-  MachineConfig m;  // 10 000 mm/min, 2 000 mm/s², 1 ms, look-ahead 10 000 blocks
-  for (std::size_t i = 0; i < 3; ++i) {
-    m.axes[i].enabled = true;
-    m.axes[i].max_speed_mm_min = 20000;
-    m.axes[i].max_accel_mm_s2 = 10000;
-  }
-  return m;
-}
+std::string g_shared_dir = CNCORE_SHARED_DIR;
+bool g_histogram = false;
 
-// A random path of `segments` segments (0.5–5 mm, turns up to ±20°, so the look-ahead runs at
-// speed), each cut into `refine` equal pieces: the same geometry in refine× more blocks.
-std::vector<Block> random_path(int segments, int refine) {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> len(0.5, 5.0), turn(-0.35, 0.35);
-  std::vector<Block> out;
-  out.reserve(static_cast<std::size_t>(segments) * static_cast<std::size_t>(refine));
-  AxisVec p;
-  double heading = 0;
-  std::uint32_t line = 1;
-  for (int i = 0; i < segments; ++i) {
-    heading += turn(rng);
-    const double l = len(rng);
-    const Vec3 d{l * std::cos(heading), l * std::sin(heading), 0};
-    const Vec3 a = p.xyz();
-    for (int k = 1; k <= refine; ++k) {
-      Block b;
-      b.kind = BlockKind::kLine;
-      b.line = line++;
-      b.start = p;
-      b.end.set_xyz(a + (static_cast<double>(k) / refine) * d);
-      b.feed_mm_min = 10000;
-      out.push_back(b);
-      p = b.end;
+// ---------------------------------------------------------------------------------------------
+// Programs
+
+struct Program {
+  std::string name;
+  std::vector<Block> blocks;
+  bool ok = false;
+  std::string error;
+};
+
+// A program is interpreted the first time a selected benchmark needs it (not timed).
+struct LazyProgram {
+  LazyProgram(std::string n, Program (*l)(int), int f) : name(std::move(n)), load(l), factor(f) {}
+  std::string name;
+  Program (*load)(int factor);
+  int factor;
+  const Program& get() {
+    if (!done) {
+      prog = load(factor);
+      if (!prog.ok)
+        std::fprintf(stderr, "bench_motion: %s skipped: %s\n", name.c_str(), prog.error.c_str());
+      done = true;
     }
+    return prog;
   }
+  Program prog;
+  bool done = false;
+};
+
+std::vector<Block> interpret(interp::Interpreter& in) {
+  std::vector<Block> out;
+  Block b;
+  while (in.next(b)) out.push_back(b);
   return out;
 }
 
-struct RunStats {
+// The same path in `factor`× more blocks (lines in equal pieces, arcs in equal angles), through
+// the G-code writer that `cncore-gen refine` uses, then the interpreter again.
+std::vector<Block> refine(const std::vector<Block>& blocks, int factor, const MachineConfig& m) {
+  std::ostringstream text;
+  testing::gen::GcodeWriter w(text, factor);
+  for (const Block& b : blocks) w.add(b);
+  w.finish();
+  interp::Interpreter in(interp::Interpreter::FromText{}, text.str(), "refined", m, {});
+  return interpret(in);
+}
+
+Program load_stress(int factor) {
+  Program p;
+  p.name = factor == 1 ? "stress_test" : "stress_test_x" + std::to_string(factor);
+  const std::string path = g_shared_dir + "/testdata/gcode/ugs/stress_test.gcode";
+  try {
+    const MachineConfig m = default_machine_config();
+    interp::Interpreter in(path, m, {});
+    p.blocks = interpret(in);
+    if (factor > 1) p.blocks = refine(p.blocks, factor, m);
+    p.ok = true;
+  } catch (const InputError& e) {
+    p.error = e.formatted();
+  }
+  return p;
+}
+
+// A seeded random path of 2000 short segments (0.2–2 mm, turns up to ±90°: real corners), in
+// `refine`× more blocks: 2 k and 200 k blocks of the same path for the memory comparison.
+Program load_random(int factor) {
+  Program p;
+  p.name = factor == 1 ? "random_2k" : "random_2k_x" + std::to_string(factor);
+  const MachineConfig m = default_machine_config();
+  interp::Interpreter in(interp::Interpreter::FromText{},
+                         testing::gen::random_path(1, 2000, 0.2, 2.0, 90, factor), p.name, m, {});
+  p.blocks = interpret(in);
+  p.ok = true;
+  return p;
+}
+
+std::vector<LazyProgram>& programs() {
+  static std::vector<LazyProgram> all;
+  return all;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Timing
+
+// TSC ticks per ns, calibrated against steady_clock (the TSC is constant and non-stop here;
+// reading it costs ~10 ns against ~25 ns for clock_gettime under kvm-clock).
+double tsc_per_ns() {
+  static const double f = [] {
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::uint64_t c0 = __rdtsc();
+    while (std::chrono::steady_clock::now() - t0 < std::chrono::milliseconds(50)) {
+    }
+    const std::uint64_t c1 = __rdtsc();
+    const double ns =
+        std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count();
+    return static_cast<double>(c1 - c0) / ns;
+  }();
+  return f;
+}
+
+inline std::uint64_t ticks() {
+  _mm_lfence();
+  const std::uint64_t t = __rdtsc();
+  _mm_lfence();
+  return t;
+}
+
+motion::KernelOptions options(int type) {
+  motion::KernelOptions o;
+  o.accdec = static_cast<motion::AccDecType>(type);
+  return o;
+}
+
+const char* type_name(int type) {
+  return type == 0 ? "moving_average" : "acceleration";
+}
+
+// Cycles per second of Kernel::push + Kernel::step on a pre-interpreted program (construction
+// not timed). Also: heap bytes allocated by the kernel's construction and allocations while it
+// runs (must be 0: memory flat in program length).
+void BM_Throughput(benchmark::State& state, LazyProgram* lazy, int type) {
+  const Program* prog = &lazy->get();
+  if (!prog->ok) {
+    state.SkipWithError(prog->error.c_str());
+    return;
+  }
+  const MachineConfig m = default_machine_config();
+  const motion::KernelOptions o = options(type);
   std::uint64_t cycles = 0;
-  double worst_cycle_s = 0;      // wall time of the slowest step() (includes preemption)
-  double p50_s = 0, p999_s = 0;  // median and 99.9th percentile of step()
+  std::uint64_t construct_bytes = 0, run_allocs = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    const std::uint64_t b0 = g_alloc_bytes;
+    auto k = std::make_unique<motion::Kernel>(m, o);
+    construct_bytes = g_alloc_bytes - b0;
+    const std::uint64_t a0 = g_allocs;
+    state.ResumeTiming();
+    std::size_t next = 0;
+    const std::size_t n = prog->blocks.size();
+    motion::Sample s;
+    for (;;) {
+      while (next < n && k->wants_block()) k->push(prog->blocks[next++]);
+      if (next == n) k->end_of_program();
+      if (!k->step(s)) break;
+      benchmark::DoNotOptimize(s);
+      ++cycles;
+    }
+    state.PauseTiming();
+    run_allocs = g_allocs - a0;
+    k.reset();
+    state.ResumeTiming();
+  }
+  state.counters["Mcycles_per_s"] =
+      benchmark::Counter(static_cast<double>(cycles) * 1e-6, benchmark::Counter::kIsRate);
+  state.counters["blocks"] = static_cast<double>(prog->blocks.size());
+  state.counters["kernel_heap_MB"] = static_cast<double>(construct_bytes) / 1e6;
+  state.counters["allocs_in_run"] = static_cast<double>(run_allocs);
+}
+
+struct Percentiles {
+  double p50 = 0, p99 = 0, p999 = 0, p9999 = 0, max = 0, sum = 0;
+  std::size_t over_10us = 0;
 };
 
-// Runs the whole program; `time_each` measures every step() separately (worst cycle).
-RunStats run(const std::vector<Block>& blocks, bool time_each, motion::AccDecType type) {
-  const MachineConfig m = machine();
-  motion::KernelOptions o;
-  o.accdec = type;
-  motion::Kernel k(m, o);
-  std::size_t next = 0;
-  motion::Sample s;
-  RunStats st;
-  std::vector<double> times;
-  if (time_each) times.reserve(1 << 20);
-  for (;;) {
-    while (next < blocks.size() && k.wants_block()) k.push(blocks[next++]);
-    if (next == blocks.size()) k.end_of_program();
-    if (time_each) {
-      const auto t0 = std::chrono::steady_clock::now();
-      const bool more = k.step(s);
-      const double dt =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      if (!more) break;
-      times.push_back(dt);
-    } else if (!k.step(s)) {
-      break;
+Percentiles percentiles(std::vector<double>& ns) {
+  Percentiles p;
+  if (ns.empty()) return p;
+  for (double v : ns) {
+    p.sum += v;
+    if (v > 10000) ++p.over_10us;
+  }
+  std::sort(ns.begin(), ns.end());
+  auto at = [&](double q) {
+    return ns[std::min(ns.size() - 1, static_cast<std::size_t>(q * ns.size()))];
+  };
+  p.p50 = at(0.5);
+  p.p99 = at(0.99);
+  p.p999 = at(0.999);
+  p.p9999 = at(0.9999);
+  p.max = ns.back();
+  return p;
+}
+
+void print_histogram(const std::string& title, const std::vector<double>& sorted_ns) {
+  // Powers-of-two buckets from 32 ns.
+  std::array<std::size_t, 24> count{};
+  for (double v : sorted_ns) {
+    std::size_t b = 0;
+    for (double edge = 32; v >= edge && b + 1 < count.size(); edge *= 2) ++b;
+    ++count[b];
+  }
+  std::fprintf(stderr, "%s (%zu cycles)\n", title.c_str(), sorted_ns.size());
+  double lo = 0, hi = 32;
+  for (std::size_t b = 0; b < count.size(); ++b, lo = hi, hi *= 2) {
+    if (count[b] != 0) std::fprintf(stderr, "  [%8.0f, %8.0f) ns  %zu\n", lo, hi, count[b]);
+  }
+}
+
+// Per-cycle latency: every Kernel::step timed on its own (TSC, fenced), pushes between steps
+// untimed. Reports step() percentiles and worst cycle, step()-only cycles/s (Σ of the step
+// times, the timer's own cost subtracted), and the same timer around an empty call right after
+// each step as the noise floor of the machine over the same wall time (its worst is preemption
+// and interrupts, not the kernel).
+void BM_Latency(benchmark::State& state, LazyProgram* lazy, int type) {
+  const Program* prog = &lazy->get();
+  if (!prog->ok) {
+    state.SkipWithError(prog->error.c_str());
+    return;
+  }
+  const MachineConfig m = default_machine_config();
+  const motion::KernelOptions o = options(type);
+  const double f = tsc_per_ns();
+  std::vector<double> step_ns, empty_ns;
+  std::vector<std::uint64_t> raw, raw_empty;
+  Percentiles st, floor;
+  double overhead_ns = 0;
+  for (auto _ : state) {
+    // Timer cost: back-to-back reads (minimum of many).
+    std::uint64_t best = UINT64_MAX;
+    for (int i = 0; i < 100000; ++i) {
+      const std::uint64_t a = ticks();
+      const std::uint64_t b = ticks();
+      best = std::min(best, b - a);
     }
-    benchmark::DoNotOptimize(s);
-    ++st.cycles;
-  }
-  if (!times.empty()) {
-    std::sort(times.begin(), times.end());
-    st.p50_s = times[times.size() / 2];
-    st.p999_s = times[times.size() * 999 / 1000];
-    st.worst_cycle_s = times.back();
-  }
-  return st;
-}
+    overhead_ns = static_cast<double>(best) / f;
 
-// Cycles per second: the run includes pushing the blocks (the interpreter's output), as the
-// simulation does. Args: refine factor (1 or 100), acc/dec type (0 moving average, 1 acceleration).
-void BM_KernelCycles(benchmark::State& state) {
-  const auto blocks = random_path(2000, static_cast<int>(state.range(0)));
-  std::uint64_t cycles = 0;
-  const auto type = static_cast<motion::AccDecType>(state.range(1));
-  for (auto _ : state) cycles += run(blocks, false, type).cycles;
-  state.counters["cycles_per_s"] =
-      benchmark::Counter(static_cast<double>(cycles), benchmark::Counter::kIsRate);
-  state.counters["blocks"] = static_cast<double>(blocks.size());
+    motion::Kernel k(m, o);
+    raw.assign(1u << 22, 0);  // touched before the run: no page fault while timing
+    raw_empty.assign(raw.size(), 0);
+    std::size_t next = 0, cycles = 0;
+    const std::size_t n = prog->blocks.size();
+    motion::Sample s;
+    for (;;) {
+      while (next < n && k.wants_block()) k.push(prog->blocks[next++]);
+      if (next == n) k.end_of_program();
+      const std::uint64_t t0 = ticks();
+      const bool more = k.step(s);
+      const std::uint64_t t1 = ticks();
+      benchmark::DoNotOptimize(s);
+      // Noise floor, interleaved so that it spans the same wall time: a timed empty call.
+      const std::uint64_t e0 = ticks();
+      benchmark::ClobberMemory();
+      const std::uint64_t e1 = ticks();
+      if (!more) break;
+      if (cycles < raw.size()) {
+        raw[cycles] = t1 - t0;
+        raw_empty[cycles] = e1 - e0;
+      }
+      ++cycles;
+    }
+    step_ns.resize(std::min(cycles, raw.size()));
+    for (std::size_t i = 0; i < step_ns.size(); ++i) {
+      step_ns[i] = std::max(0.0, static_cast<double>(raw[i]) / f - overhead_ns);
+    }
+    empty_ns.resize(step_ns.size());
+    for (std::size_t i = 0; i < empty_ns.size(); ++i) {
+      empty_ns[i] = std::max(0.0, static_cast<double>(raw_empty[i]) / f - overhead_ns);
+    }
+    st = percentiles(step_ns);
+    floor = percentiles(empty_ns);
+  }
+  if (g_histogram) {
+    print_histogram(prog->name + " " + type_name(type) + ": step()", step_ns);
+    print_histogram(prog->name + " " + type_name(type) + ": empty timed call", empty_ns);
+  }
+  state.counters["cycles"] = static_cast<double>(step_ns.size());
+  state.counters["step_Mcycles_per_s"] = st.sum > 0 ? 1e3 * step_ns.size() / st.sum : 0;
+  state.counters["p50_ns"] = st.p50;
+  state.counters["p99_ns"] = st.p99;
+  state.counters["p999_ns"] = st.p999;
+  state.counters["p9999_ns"] = st.p9999;
+  state.counters["worst_us"] = st.max / 1e3;
+  state.counters["over_10us"] = static_cast<double>(st.over_10us);
+  state.counters["floor_worst_us"] = floor.max / 1e3;
+  state.counters["floor_over_10us"] = static_cast<double>(floor.over_10us);
+  state.counters["timer_ns"] = overhead_ns;
 }
-BENCHMARK(BM_KernelCycles)
-    ->Args({1, 0})
-    ->Args({100, 0})
-    ->Args({1, 1})
-    ->Args({100, 1})
-    ->Unit(benchmark::kMillisecond);
-
-// Worst single step() with a full 10 000-block window (the 100× finer path keeps it full).
-void BM_KernelWorstCycle(benchmark::State& state) {
-  const auto blocks = random_path(2000, static_cast<int>(state.range(0)));
-  RunStats st;
-  const auto type = static_cast<motion::AccDecType>(state.range(1));
-  for (auto _ : state) st = run(blocks, true, type);
-  // Per step() (wall clock, two clock reads included): median, 99.9 %, worst (the worst is
-  // dominated by preemption on a shared machine).
-  state.counters["step_p50_ns"] = st.p50_s * 1e9;
-  state.counters["step_p999_ns"] = st.p999_s * 1e9;
-  state.counters["worst_cycle_us"] = st.worst_cycle_s * 1e6;
-  state.counters["cycles"] = static_cast<double>(st.cycles);
-}
-BENCHMARK(BM_KernelWorstCycle)
-    ->Args({1, 0})
-    ->Args({100, 0})
-    ->Args({1, 1})
-    ->Args({100, 1})
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(2);
 
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  std::vector<char*> args;
+  bool lock = false;
+  for (int i = 0; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--mlock") == 0) {
+      lock = true;
+    } else if (std::strcmp(argv[i], "--histogram") == 0) {
+      g_histogram = true;
+    } else if (std::strcmp(argv[i], "--shared") == 0 && i + 1 < argc) {
+      g_shared_dir = argv[++i];
+    } else {
+      args.push_back(argv[i]);
+    }
+  }
+  if (lock && mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
+    std::fprintf(stderr, "bench_motion: mlockall failed (%s); running unlocked\n",
+                 std::strerror(errno));
+  }
+  int n = static_cast<int>(args.size());
+  benchmark::Initialize(&n, args.data());
+  if (benchmark::ReportUnrecognizedArguments(n, args.data())) return 1;
+
+  auto& progs = programs();
+  progs.reserve(4);
+  progs.emplace_back("stress_test", load_stress, 1);
+  progs.emplace_back("stress_test_x100", load_stress, 100);
+  progs.emplace_back("random_2k", load_random, 1);
+  progs.emplace_back("random_2k_x100", load_random, 100);
+  for (int type = 0; type < 2; ++type) {
+    for (LazyProgram& p : progs) {
+      const std::string suffix = p.name + "/" + type_name(type);
+      benchmark::RegisterBenchmark(("Throughput/" + suffix).c_str(), BM_Throughput, &p, type)
+          ->Unit(benchmark::kMillisecond);
+    }
+    for (LazyProgram& p : progs) {
+      const std::string suffix = p.name + "/" + type_name(type);
+      benchmark::RegisterBenchmark(("Latency/" + suffix).c_str(), BM_Latency, &p, type)
+          ->Unit(benchmark::kMillisecond)
+          ->Iterations(1);
+    }
+  }
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
