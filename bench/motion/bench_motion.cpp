@@ -10,7 +10,8 @@
 //
 // Extra flags (before the Google Benchmark ones): --shared DIR (corpus root, default the CMake
 // cache's CNCORE_SHARED_DIR), --mlock (mlockall(MCL_CURRENT | MCL_FUTURE) before measuring),
-// --histogram (print the per-cycle latency histograms to stderr).
+// --histogram (print the per-cycle latency histograms to stderr), --digest (print a hash of
+// every program's samples instead of benchmarking).
 #include <benchmark/benchmark.h>
 #include <sys/mman.h>
 #include <x86intrin.h>
@@ -350,14 +351,50 @@ void BM_Latency(benchmark::State& state, LazyProgram* lazy, int type) {
   state.counters["timer_ns"] = overhead_ns;
 }
 
+// --digest: one line per program and type with the cycle count and an FNV-1a hash of every
+// sample's bytes (positions, speed, line): a bit-exact before/after check of a change that must
+// not alter the trajectory.
+void print_digests() {
+  const MachineConfig m = default_machine_config();
+  for (int type = 0; type < 2; ++type) {
+    for (LazyProgram& lazy : programs()) {
+      const Program& prog = lazy.get();
+      if (!prog.ok) continue;
+      motion::Kernel k(m, options(type));
+      std::uint64_t h = 1469598103934665603ull, cycles = 0;
+      auto mix = [&h](const void* p, std::size_t n) {
+        const auto* c = static_cast<const unsigned char*>(p);
+        for (std::size_t i = 0; i < n; ++i) h = (h ^ c[i]) * 1099511628211ull;
+      };
+      std::size_t next = 0;
+      motion::Sample s;
+      for (;;) {
+        while (next < prog.blocks.size() && k.wants_block()) k.push(prog.blocks[next++]);
+        if (next == prog.blocks.size()) k.end_of_program();
+        if (!k.step(s)) break;
+        mix(&s.t_s, sizeof s.t_s);
+        mix(&s.line, sizeof s.line);
+        mix(&s.position, sizeof s.position);
+        mix(&s.path_position, sizeof s.path_position);
+        mix(&s.feed_mm_min, sizeof s.feed_mm_min);
+        ++cycles;
+      }
+      std::printf("%-18s %-15s cycles %8llu  digest %016llx\n", prog.name.c_str(), type_name(type),
+                  static_cast<unsigned long long>(cycles), static_cast<unsigned long long>(h));
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::vector<char*> args;
-  bool lock = false;
+  bool lock = false, digest = false;
   for (int i = 0; i < argc; ++i) {
     if (std::strcmp(argv[i], "--mlock") == 0) {
       lock = true;
+    } else if (std::strcmp(argv[i], "--digest") == 0) {
+      digest = true;
     } else if (std::strcmp(argv[i], "--histogram") == 0) {
       g_histogram = true;
     } else if (std::strcmp(argv[i], "--shared") == 0 && i + 1 < argc) {
@@ -380,6 +417,10 @@ int main(int argc, char** argv) {
   progs.emplace_back("stress_test_x100", load_stress, 100);
   progs.emplace_back("random_2k", load_random, 1);
   progs.emplace_back("random_2k_x100", load_random, 100);
+  if (digest) {
+    print_digests();
+    return 0;
+  }
   for (int type = 0; type < 2; ++type) {
     for (LazyProgram& p : progs) {
       const std::string suffix = p.name + "/" + type_name(type);
