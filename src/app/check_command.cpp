@@ -1,0 +1,70 @@
+// `cncore check`: interpret a program only and report every error (or list the blocks).
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <iostream>
+#include <string>
+
+#include "app/cli_common.hpp"
+#include "app/commands.hpp"
+#include "core/error.hpp"
+#include "interpreter/interpreter.hpp"
+
+namespace cncore::app {
+
+int command_check(const CheckArgs& a) {
+  const MachineConfig machine = machine_from(a.machine);
+  const interp::Options options = interpreter_options(a.vars, a.params);
+  require_readable(a.program);
+  interp::Interpreter interpreter(a.program, machine, options);
+  Block b;
+  std::uint64_t blocks = 0, motion = 0;
+  std::string out;
+  auto flush = [&out] {
+    std::fwrite(out.data(), 1, out.size(), stdout);
+    out.clear();
+  };
+  // Every error is reported: after one, the interpreter goes on with the next line. Errors
+  // after the first may be its consequences; a repeated error or too many end the check.
+  constexpr int kMaxErrors = 50;
+  int errors = 0;
+  std::string last_error;
+  for (;;) {
+    try {
+      if (!interpreter.next(b)) break;
+    } catch (const InputError& e) {
+      flush();  // the blocks before the error are listed, then the error goes to stderr
+      std::fflush(stdout);
+      const std::string text = e.formatted();
+      if (text == last_error) break;
+      std::cerr << text << "\n";
+      last_error = text;
+      if (++errors >= kMaxErrors) {
+        std::cerr << a.program << ": too many errors, stopping the check\n";
+        break;
+      }
+      if (!interpreter.recover()) break;
+      continue;
+    }
+    ++blocks;
+    if (b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc) {
+      ++motion;
+    }
+    if (a.blocks) {
+      out += interp::format_block(b, machine);
+      out += '\n';
+      if (out.size() > (1 << 16)) flush();
+    }
+  }
+  if (errors > 0) {
+    flush();
+    std::fflush(stdout);
+    return 1;
+  }
+  if (!a.blocks) out = fmt::format("{}: ok, {} blocks ({} motion)\n", a.program, blocks, motion);
+  std::fwrite(out.data(), 1, out.size(), stdout);
+  std::fflush(stdout);
+  return 0;
+}
+
+}  // namespace cncore::app

@@ -1,0 +1,112 @@
+#include "app/cli_common.hpp"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.hpp"
+
+namespace cncore::app {
+
+std::string trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+  return std::string(s);
+}
+
+std::optional<double> to_number(std::string_view text) {
+  const std::string s = trim(text);
+  if (s.empty()) return std::nullopt;
+  double v = 0;
+  const char* first = s.data();
+  if (*first == '+') ++first;
+  const auto [end, ec] = std::from_chars(first, s.data() + s.size(), v);
+  if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+double override_value(const std::string& option, std::string_view text, double max_pct) {
+  const auto v = to_number(text);
+  if (!v) throw UsageError(fmt::format("{}: '{}' is not a number", option, text));
+  if (*v < 0 || *v > max_pct) {
+    throw UsageError(fmt::format("{}: override {} % is outside 0 … {} % (machine max_override_pct)",
+                                 option, *v, max_pct));
+  }
+  return *v;
+}
+
+std::pair<std::string, double> name_value(const std::string& option, const std::string& arg) {
+  const std::size_t eq = arg.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    throw UsageError(fmt::format("{}: '{}' is not NAME=VALUE", option, arg));
+  }
+  const auto v = to_number(std::string_view(arg).substr(eq + 1));
+  if (!v) throw UsageError(fmt::format("{}: '{}': the value must be a number", option, arg));
+  return {trim(std::string_view(arg).substr(0, eq)), *v};
+}
+
+interp::Options interpreter_options(const std::vector<std::string>& vars,
+                                    const std::vector<std::string>& params) {
+  interp::Options o;
+  for (const std::string& a : vars) {
+    auto [name, value] = name_value("--var", a);
+    for (const char c : name) {
+      if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) {
+        throw UsageError(fmt::format("--var: '{}': a name has letters, digits and _ only", a));
+      }
+    }
+    o.named_params[name] = value;
+  }
+  for (const std::string& a : params) {
+    auto [name, value] = name_value("--param", a);
+    int n = 0;
+    const auto [end, ec] = std::from_chars(name.data(), name.data() + name.size(), n);
+    if (ec != std::errc() || end != name.data() + name.size() || n < 1) {
+      throw UsageError(
+          fmt::format("--param: '{}': the parameter number must be an integer >= 1", a));
+    }
+    o.params[n] = value;
+  }
+  return o;
+}
+
+MachineConfig machine_from(const std::string& path) {
+  return machine_config_or_default(path);
+}
+
+void require_readable(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw InputError(path, 0, 0, "cannot open: it is a directory");
+  }
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, 0, "cannot open");
+}
+
+ProgressObserver::ProgressObserver()
+    : enabled_(::isatty(STDERR_FILENO) == 1), start_(Clock::now()) {}
+
+void ProgressObserver::on_sample(const motion::Sample& s) {
+  if (!enabled_ || (++cycles_ & 4095) != 0) return;
+  const double wall_s = std::chrono::duration<double>(Clock::now() - start_).count();
+  if (wall_s < 1.0) return;
+  std::fprintf(stderr, "\rcncore: simulated %.1f s, line %u, %.0f cycles/s   ", s.t_s, s.line,
+               static_cast<double>(cycles_) / wall_s);
+  std::fflush(stderr);
+  shown_ = true;
+}
+
+void ProgressObserver::clear() {
+  if (!shown_) return;
+  std::fprintf(stderr, "\r%60s\r", "");
+  std::fflush(stderr);
+  shown_ = false;
+}
+
+}  // namespace cncore::app

@@ -1,0 +1,65 @@
+// Shared pieces of the `cncore` commands (src/app only): the usage error (exit code 2), parsing
+// of command-line values, the machine configuration, and the progress display.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "config/machine_config.hpp"
+#include "interpreter/interpreter.hpp"
+#include "simulation/run.hpp"
+
+namespace cncore::app {
+
+// A command-line value that is wrong (exit code 2).
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+std::string trim(std::string_view s);
+
+// The whole text must be a finite number.
+std::optional<double> to_number(std::string_view text);
+
+// A feed override in % from the option `option`: a number in 0 … max_pct, else UsageError.
+double override_value(const std::string& option, std::string_view text, double max_pct);
+
+// "NAME=VALUE" with a numeric value, else UsageError naming the option.
+std::pair<std::string, double> name_value(const std::string& option, const std::string& arg);
+
+// --var NAME=V and --param N=V of `run` and `check`.
+interp::Options interpreter_options(const std::vector<std::string>& vars,
+                                    const std::vector<std::string>& params);
+
+// The configuration file, or the built-in machine for an empty path (InputError when bad).
+MachineConfig machine_from(const std::string& path);
+
+// InputError "cannot open" for a missing file or a directory (before anything is written).
+void require_readable(const std::string& path);
+
+// A one-line progress display on stderr (spec 05): only when stderr is a terminal, and only once
+// the run has taken more than a second. Checks the clock every 4096 cycles.
+class ProgressObserver : public sim::SampleObserver {
+ public:
+  ProgressObserver();
+  ~ProgressObserver() override { clear(); }
+  void on_sample(const motion::Sample& s) override;
+  void on_finish() override { clear(); }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  void clear();
+  bool enabled_;
+  bool shown_ = false;
+  std::uint64_t cycles_ = 0;
+  Clock::time_point start_;
+};
+
+}  // namespace cncore::app

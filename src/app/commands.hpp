@@ -1,0 +1,50 @@
+// The `cncore` commands (spec 05), one source file each: the arguments CLI11 fills in (main.cpp)
+// and the function that runs the command and returns the exit code. They throw InputError
+// (exit 1) and UsageError (exit 2); main() turns them into messages.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace cncore::app {
+
+struct RunArgs {
+  std::string program, machine, trajectory, summary, mode = "lookahead";
+  std::string accdec;  // --accdec; empty: the machine's [motion] accdec
+  std::optional<double> override_pct;
+  std::vector<std::string> override_at, vars, params;
+  std::string correction;  // --correction on|off; empty: [direction_correction] enabled
+  std::string report;      // --report FILE.html
+  std::string adaptive;    // --adaptive on|off; empty: adaptive.enabled of the configuration
+  std::string load_csv;    // --load FILE.csv
+  std::string heightmap, heightmap_grid;  // cutting simulation: --heightmap, --heightmap-grid
+};
+
+int command_run(const RunArgs& a);
+
+struct CheckArgs {
+  std::string program, machine;
+  bool blocks = false;
+  std::vector<std::string> vars, params;
+};
+
+int command_check(const CheckArgs& a);
+
+struct TableArgs {
+  std::vector<std::string> tables;
+  std::string machine, trajectory, summary;
+  bool print_effective = false;
+  std::optional<double> spindle_rpm, master_speed_mm_min;
+  std::uint32_t repeat = 1;
+  std::vector<std::string> vars, params, signals, signals_at;
+  std::string master_program;  // REF AXIS: a part program moves the master axis
+};
+
+int command_table(const TableArgs& a);
+
+// Prints the configuration (the built-in one for an empty path) as TOML.
+int command_machine(const std::string& machine_path);
+
+}  // namespace cncore::app
