@@ -61,7 +61,9 @@ struct Kernel::Impl {
         buf(std::max<std::size_t>(4, static_cast<std::size_t>(m.lookahead_blocks) + 2)),
         acc_owner(make_accdec(buf, lim, o, m)),
         acc(*acc_owner),
+        ma(dynamic_cast<MovingAverageAccDec*>(acc_owner.get())),
         barriers(buf.capacity()),
+        events(buf.capacity()),
         post_ring(lim.post_filter() ? lim.post_cycles : 1) {
     for (std::size_t i = 0; i < kMaxAxes; ++i) last_end[i] = m.start_position[i];
     position = last_end;
@@ -75,11 +77,27 @@ struct Kernel::Impl {
     override_pct = std::clamp(std::isfinite(pct) ? pct : 0.0, 0.0, machine.max_override_pct);
   }
 
-  // A block takes up to three items: a stop before it, itself, an exact stop after it.
-  bool wants_block() const { return buf.size() + 3 <= buf.capacity(); }
+  // A block takes up to three items: a stop before it, itself, an exact stop after it. The items
+  // the tool has passed are dropped here, on the producer's side, rather than in step(): a
+  // cycle that passes many tiny segments would otherwise pay for each of them in the real-time
+  // path. The producer asks before every push, so the buffer is the same when step() runs.
+  bool wants_block() {
+    retire();
+    return buf.size() + 3 <= buf.capacity();
+  }
+
+  void pop_event() {
+    ev_head = ev_head + 1 == events.size() ? 0 : ev_head + 1;
+    --ev_size;
+  }
 
   void push_event(const Segment& ev) {
     const std::uint64_t idx = buf.push(ev);
+    // Events already retired from the buffer are no longer needed: the ring never holds more
+    // than the buffer's capacity.
+    while (ev_size > 0 && events[ev_head] < buf.begin_index()) pop_event();
+    events[(ev_head + ev_size) % events.size()] = idx;
+    ++ev_size;
     if (ev.barrier) {
       barriers[(bq_head + bq_size) % barriers.size()] = idx;
       ++bq_size;
@@ -117,7 +135,10 @@ struct Kernel::Impl {
       seg.s0_mm = total_mm;
       const bool joint = have_motion && !barrier_since_motion && last_motion >= buf.begin_index();
       const bool slow_stops = !accel_type(options);
-      if (joint && planner::joint_speed_pc(buf[last_motion], seg, lim, slow_stops) <= 0) {
+      // The moving average needs this same value in on_joint: computed once (push is the
+      // per-block cost that P7's 100x finer programs multiply).
+      const double vg = joint ? planner::joint_speed_pc(buf[last_motion], seg, lim, slow_stops) : 0;
+      if (joint && vg <= 0) {
         // A joint that must be passed at speed 0 (exact path through the post filter): a stop
         // that also waits for the post filter to settle, so the corner is not rounded.
         push_event(stop_event(b.line));
@@ -126,7 +147,11 @@ struct Kernel::Impl {
       const std::uint64_t idx = buf.push(seg);
       acc.on_segment(idx, buf[idx]);
       if (have_motion && !barrier_since_motion && last_motion >= buf.begin_index()) {
-        acc.on_joint(last_motion, buf[last_motion], buf[idx]);
+        if (ma != nullptr) {
+          ma->on_joint(last_motion, buf[last_motion], buf[idx], vg);  // same joint as vg's
+        } else {
+          acc.on_joint(last_motion, buf[last_motion], buf[idx]);
+        }
       }
       have_motion = true;
       barrier_since_motion = false;
@@ -168,15 +193,20 @@ struct Kernel::Impl {
     return last.kind == ItemKind::kMotion ? acc.tool_mm() >= last.end_mm() : last.done;
   }
 
-  // Moves the output cursor to the item under the tool, handling events on the way. Each item
-  // is passed once: amortised O(1) per block.
+  // Moves the output cursor to the item under the tool, handling events on the way. Runs of
+  // motion items are skipped by a galloping search up to the next event (events), so a cycle
+  // that passes k tiny segments costs O(log k), not O(k).
   void advance_output(double tool, Sample& out) {
     while (out_idx < buf.end_index()) {
       Segment& it = buf[out_idx];
       const bool has_next = out_idx + 1 < buf.end_index();
       if (it.kind == ItemKind::kMotion) {
         if (tool >= it.end_mm() && has_next) {
-          ++out_idx;
+          while (ev_size > 0 && events[ev_head] < out_idx) pop_event();
+          const std::uint64_t next_event = ev_size > 0 ? events[ev_head] : UINT64_MAX;
+          // The walk stops at the first motion item the tool is inside, the last item, or the
+          // next event, whichever comes first.
+          out_idx = buf.seek(out_idx + 1, tool, next_event);
           continue;
         }
         return;
@@ -244,6 +274,19 @@ struct Kernel::Impl {
                    : (1.0 / static_cast<double>(post_ring.size())) * post_sum;
   }
 
+  // The channels fill() does not set, at their defaults (as Sample{} has them). Assigning them
+  // one by one is much cheaper than `out = Sample{}`, which compiles to a `rep stos` of the
+  // whole sample on every cycle.
+  static void clear_events(Sample& out) {
+    static_assert(sizeof(Sample) == 184, "a field was added to Sample: reset it here too");
+    out.load_pct = std::nan("");
+    out.load_target_pct = std::nan("");
+    out.ref = std::nan("");
+    out.aux_letter = 0;
+    out.aux_value = 0;
+    out.aux_p = 0;
+  }
+
   void fill(Sample& out, double speed_pc) const {
     out.t_s = static_cast<double>(cycle) * lim.period_s;
     out.line = (buf.empty() || out_idx >= buf.end_index()) ? 0 : buf[out_idx].line;
@@ -263,8 +306,8 @@ struct Kernel::Impl {
     if (!any_fixed || buf.empty()) return r;
     const double cmd = acc.commanded_mm();
     cmd_idx = std::max(cmd_idx, buf.begin_index());
-    while (cmd_idx + 1 < buf.end_index() && cmd >= buf[cmd_idx].end_mm()) ++cmd_idx;
     if (cmd_idx >= buf.end_index()) return r;
+    cmd_idx = buf.seek(cmd_idx, cmd);
     const Segment& seg = buf[cmd_idx];
     return seg.kind == ItemKind::kMotion && seg.override_fixed ? 1.0 : r;
   }
@@ -283,7 +326,7 @@ struct Kernel::Impl {
     in.hold = hold;
     in.stop_mm = stop_mm();
     acc.step(in);
-    out = Sample{};
+    clear_events(out);
     const double tool = acc.tool_mm();
     advance_output(tool, out);
     path_position = interpolate(tool);
@@ -291,7 +334,8 @@ struct Kernel::Impl {
       correction_now = buf[out_idx].correction;  // spec 03: C of the segment under the tool
     }
     post_filter(path_position);
-    retire();
+    // Once the program has ended the producer stops asking wants_block(): retire here then.
+    if (ended) retire();
     fill(out, acc.tool_speed_pc());
     return true;
   }
@@ -303,6 +347,7 @@ struct Kernel::Impl {
   planner::SegmentBuffer buf;
   std::unique_ptr<AccDec> acc_owner;
   AccDec& acc;
+  MovingAverageAccDec* ma;  // acc when it is the moving average (non-virtual fast path), else null
 
   AxisVec last_end;     // end of the last pushed motion
   double total_mm = 0;  // its path position
@@ -311,6 +356,8 @@ struct Kernel::Impl {
   std::uint64_t last_motion = 0;
   std::vector<std::uint64_t> barriers;  // unprocessed stop events, in order (fixed ring)
   std::size_t bq_head = 0, bq_size = 0;
+  std::vector<std::uint64_t> events;  // indices of event items not yet passed (fixed ring)
+  std::size_t ev_head = 0, ev_size = 0;
 
   bool ended = false, started = false, hold = false;
   double override_pct = 100;

@@ -26,12 +26,17 @@ MovingAverageAccDec::MovingAverageAccDec(const planner::SegmentBuffer& buffer,
 
 void MovingAverageAccDec::on_joint(std::uint64_t index_a, const Segment& a, const Segment& b) {
   if (mode_ != Mode::kLookahead) return;
+  on_joint(index_a, a, b, planner::joint_speed_pc(a, b, lim_));
+}
+
+void MovingAverageAccDec::on_joint(std::uint64_t index_a, const Segment& a, const Segment& b,
+                                   double vg) {
+  if (mode_ != Mode::kLookahead) return;
   const std::size_t slot = buf_.slot(index_a);
   const double post = lim_.post_filter() ? lim_.post_cycles : 0.0;
   const double span = lim_.span_cycles() + post;
   const double c = a.end_mm();
-  // Geometric cap Vg (corner, arc, axis limits, contour tolerance): OR-independent.
-  double vg = planner::joint_speed_pc(a, b, lim_);
+  // vg: the geometric cap Vg (corner, arc, axis limits, contour tolerance), OR-independent.
   // A segment shorter than one cycle's travel lets one cycle turn two corners at once (the
   // direction changes from the end of the segment before it to the start of the one after).
   // Either the speed stays ≤ its length (no cycle skips it) or the combined turn is allowed.
@@ -98,8 +103,9 @@ void MovingAverageAccDec::on_retire(std::uint64_t index) {
 const Segment* MovingAverageAccDec::advance_commanded() {
   if (buf_.empty()) return nullptr;
   cmd_idx_ = std::max(cmd_idx_, buf_.begin_index());
-  while (cmd_idx_ + 1 < buf_.end_index() && cmd_mm_ >= buf_[cmd_idx_].end_mm()) ++cmd_idx_;
   if (cmd_idx_ >= buf_.end_index()) return nullptr;
+  // O(log k) for k items passed this cycle (tiny segments), not O(k).
+  cmd_idx_ = buf_.seek(cmd_idx_, cmd_mm_);
   const Segment& s = buf_[cmd_idx_];
   return s.kind == ItemKind::kMotion ? &s : nullptr;
 }

@@ -45,6 +45,10 @@ class MovingAverageAccDec final : public AccDec {
 
   void on_joint(std::uint64_t index_a, const planner::Segment& a,
                 const planner::Segment& b) override;
+  // The same with the joint's passing speed already computed by the caller:
+  // vg == planner::joint_speed_pc(a, b, limits) (the kernel needs it first to decide on a stop).
+  void on_joint(std::uint64_t index_a, const planner::Segment& a, const planner::Segment& b,
+                double vg);
   bool holds(std::uint64_t index) const override;
   void on_retire(std::uint64_t index) override;
   void step(const CycleInput& in) override;

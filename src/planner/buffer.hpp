@@ -13,7 +13,8 @@ namespace cncore::planner {
 
 class SegmentBuffer {
  public:
-  explicit SegmentBuffer(std::size_t capacity) : items_(capacity > 0 ? capacity : 1) {}
+  explicit SegmentBuffer(std::size_t capacity)
+      : items_(capacity > 0 ? capacity : 1), end_mm_(items_.size(), 0.0), cap_(items_.size()) {}
 
   std::size_t capacity() const { return items_.size(); }
   std::size_t size() const { return static_cast<std::size_t>(end_ - begin_); }
@@ -21,23 +22,69 @@ class SegmentBuffer {
   bool full() const { return size() == capacity(); }
   std::uint64_t begin_index() const { return begin_; }  // oldest item still held
   std::uint64_t end_index() const { return end_; }      // one past the newest
+  // index % capacity. Every access of the motion cycle goes through here, so the items held
+  // (begin ≤ index < begin + capacity) take the slot from the oldest item's slot without a
+  // 64-bit division; other indices (retired or far ahead) fall back to the division.
   std::size_t slot(std::uint64_t index) const {
-    return static_cast<std::size_t>(index % items_.size());
+    const std::uint64_t off = index - begin_;  // wraps for index < begin_: slow path
+    if (off < cap_) {
+      const std::uint64_t s = begin_slot_ + off;
+      return static_cast<std::size_t>(s >= cap_ ? s - cap_ : s);
+    }
+    return static_cast<std::size_t>(index % cap_);
   }
 
   Segment& operator[](std::uint64_t index) { return items_[slot(index)]; }
   const Segment& operator[](std::uint64_t index) const { return items_[slot(index)]; }
 
-  // Precondition: !full(). Returns the new item's index.
+  // Precondition: !full(). Returns the new item's index. An item's s0_mm and length_mm are
+  // fixed once it is pushed (end_mm is kept in a compact array for seek()).
   std::uint64_t push(const Segment& s) {
-    items_[slot(end_)] = s;
+    const std::size_t k = slot(end_);
+    items_[k] = s;
+    end_mm_[k] = s.end_mm();
     return end_++;
   }
-  void pop_front() { ++begin_; }
+  void pop_front() {
+    ++begin_;
+    begin_slot_ = begin_slot_ + 1 == cap_ ? 0 : begin_slot_ + 1;
+  }
+
+  // The first item j in [from, end_index() − 1] with pos_mm < end_mm(j), or the last item when
+  // there is none: where a walk "skip j while pos ≥ end_mm(j) and j has a successor" from `from`
+  // stops, found by galloping and bisection in O(log k) for k items skipped (end_mm never
+  // decreases along the buffer: each item starts where the one before it ends), over a compact
+  // array of the items' end positions. `last` caps the
+  // result (an index ≥ from). Precondition: from < end_index().
+  std::uint64_t seek(std::uint64_t from, double pos_mm, std::uint64_t last = UINT64_MAX) const {
+    const std::uint64_t hi_max = last < end_ - 1 ? last : end_ - 1;
+    if (from >= hi_max || pos_mm < end_mm_[slot(from)]) return from;
+    // (*this)[lo] is skipped; find hi with pos < end_mm(hi) or hi = hi_max.
+    std::uint64_t lo = from, step = 1, hi = from + 1;
+    while (hi < hi_max && pos_mm >= end_mm_[slot(hi)]) {
+      lo = hi;
+      step *= 2;
+      hi = hi_max - lo > step ? lo + step : hi_max;
+    }
+    // Invariant: lo is skipped, hi is where the walk stops (or hi_max).
+    while (hi - lo > 1) {
+      const std::uint64_t mid = lo + (hi - lo) / 2;
+      if (pos_mm >= end_mm_[slot(mid)]) {
+        lo = mid;
+      } else {
+        hi = mid;
+      }
+    }
+    return hi;
+  }
 
  private:
   std::vector<Segment> items_;
+  // end_mm() of every slot: seek() probes 8 bytes per item instead of a cold ~330-byte Segment.
+  std::vector<double> end_mm_;
+  std::uint64_t cap_;
   std::uint64_t begin_ = 0, end_ = 0;
+  std::uint64_t begin_slot_ = 0;  // begin_ % cap_
 };
 
 }  // namespace cncore::planner

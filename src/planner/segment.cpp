@@ -23,6 +23,9 @@ std::uint32_t ceil_cycles(double x) {
 // v = 2a / (b + √(b² + 4·(h/ρ)·a)), b = d/T, valid for h = 0 too.
 double axis_accel_speed(double a, double d, double h_over_rho, double t) {
   const double b = d / t;
+  // Lines (h = 0): √(b²) = b exactly in IEEE arithmetic, so 2a / 2b = a / b bit for bit; the
+  // square root is skipped (segment construction is the per-block cost of fine programs).
+  if (h_over_rho == 0) return b > 0 ? a / b : kInf;
   const double den = b + std::sqrt(b * b + 4 * h_over_rho * a);
   return den > 0 ? 2 * a / den : kInf;
 }
@@ -212,10 +215,15 @@ double turn_speed_pc(const AxisVec& e, const AxisVec& s, const Limits& lim, doub
   // the chords also turn by up to v·κ (κ = 1/R of the arcs on both sides) in that cycle:
   // v·(|S − E| + v·κ) ≤ Amax, solved as 2A / (d + √(d² + 4Aκ)).
   auto limit = [curvature](double a, double d) {
+    if (curvature == 0) return d > 0 ? a / d : kInf;  // = 2a / (d + √(d²)) exactly, see above
     const double den = d + std::sqrt(d * d + 4 * a * curvature);
     return den > 0 ? 2 * a / den : kInf;
   };
-  const double turn = norm(s.xyz() - e.xyz());
+  // |S − E|² well below kTiny² means |S − E| ≤ kTiny: straight joints (most joints of fine
+  // programs) skip the square root; the comparison on |S − E| decides as before otherwise.
+  const Vec3 dse = s.xyz() - e.xyz();
+  const double turn2 = dot(dse, dse);
+  const double turn = turn2 < 0.5 * kTiny * kTiny ? 0.0 : std::sqrt(turn2);
   if (turn > kTiny) v = std::min(v, limit(lim.amax_pc2, turn));
   for (std::size_t i = 0; i < kMaxAxes; ++i) {
     const double di = std::abs(s[i] - e[i]);
