@@ -40,6 +40,7 @@ struct TableArgs {
   std::uint32_t repeat = 1;
   std::vector<std::string> vars, params, signals, signals_at;
   std::string master_program;  // REF AXIS: a part program moves the master axis
+  std::string report;          // --report FILE.html
 };
 
 int command_table(const TableArgs& a);

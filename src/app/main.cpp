@@ -109,6 +109,11 @@ int main_cli(int argc, char** argv) {
       ->type_name("FILE.csv");
   table->add_option("--summary", ta.summary, "Write the machine-readable summary (JSON)")
       ->type_name("FILE.json");
+  table
+      ->add_option("--report", ta.report,
+                   "Write a self-contained HTML page: axis speeds and accelerations, reference "
+                   "value and M codes against time")
+      ->type_name("FILE.html");
   table->add_flag("--print-effective", ta.print_effective,
                   "Print the effective tables (shifts applied) before running");
   table->add_option("--param", ta.params, "Parameter P<N> = VALUE for SFT=P<N> (repeatable)")

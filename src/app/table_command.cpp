@@ -8,6 +8,8 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "app/cli_common.hpp"
@@ -15,6 +17,7 @@
 #include "config/machine_config.hpp"
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
+#include "io/report_table.hpp"
 #include "io/summary.hpp"
 #include "io/trajectory_csv.hpp"
 #include "simulation/stepper.hpp"
@@ -49,8 +52,9 @@ auto usage_on_input_error(const std::string& option, const std::string& arg, F&&
   }
 }
 
-std::string format_table_summary(const io::Summary& s, const tables::RunSummary& r,
-                                 const tables::TablePlan& plan, const MachineConfig& machine) {
+// The reference of the tables ("time", "axis X", "spindle") and its unit (ms, mm, deg).
+std::pair<std::string, std::string> reference_name_and_unit(const tables::TablePlan& plan,
+                                                            const MachineConfig& machine) {
   static constexpr const char* kUnits[] = {"ms", "mm", "deg"};
   const tables::Table& first = plan.tables.front();
   std::string ref_name = "time";
@@ -63,6 +67,12 @@ std::string format_table_summary(const io::Summary& s, const tables::RunSummary&
   if (first.ref_kind == tables::RefKind::kAxis && machine.axes[first.ref_axis].rotary) {
     unit = "deg";
   }
+  return {ref_name, unit};
+}
+
+std::string format_table_summary(const io::Summary& s, const tables::RunSummary& r,
+                                 const tables::TablePlan& plan, const MachineConfig& machine) {
+  const auto [ref_name, unit] = reference_name_and_unit(plan, machine);
   std::string o;
   for (const tables::Table& t : plan.tables) {
     std::string axes;
@@ -199,12 +209,24 @@ int command_table(const TableArgs& a) {
   }
   std::optional<io::AtomicOutputFile> json;
   if (!a.summary.empty()) json.emplace(a.summary);
+  std::optional<io::AtomicOutputFile> html;
+  std::optional<io::TableReportObserver> report;
+  if (!a.report.empty()) {
+    html.emplace(a.report);
+    // The table axes, and the master axis of REF AXIS (it moves too).
+    std::uint32_t charted = table_axes;
+    if (plan.tables.front().ref_kind == tables::RefKind::kAxis) {
+      charted |= 1U << plan.tables.front().ref_axis;
+    }
+    report.emplace(machine, charted);
+  }
 
   io::SummaryObserver summary(machine, "table");
   summary.set_record_sample_events(false);  // every M code of a cycle, added below
   ProgressObserver progress;
   std::vector<sim::SampleObserver*> observers{&summary, &progress};
   if (csv) observers.push_back(&*csv);
+  if (report) observers.push_back(&*report);
   const tables::RunSummary result = tables::run_tables(plan, [&](const tables::TableSample& ts) {
     motion::Sample m = tables::to_motion_sample(ts);
     m.ref = ts.ref;
@@ -216,14 +238,27 @@ int command_table(const TableArgs& a) {
     }
     for (const tables::MEvent& e : ts.m_codes) {
       summary.add_event({ts.t_s, e.line, 'M', static_cast<double>(e.code)});
+      if (report) report->add_m_code(ts.t_s, e.table, e.line, e.code, ts.ref);
     }
     for (sim::SampleObserver* o : observers) o->on_sample(m);
   });
   for (sim::SampleObserver* o : observers) o->on_finish();
 
   if (json) json->write(io::summary_to_json(summary.summary(), machine));
+  if (html) {
+    io::TableReportInput in;
+    for (const tables::Table& t : plan.tables) in.tables.push_back(t.file);
+    std::tie(in.ref_name, in.ref_unit) = reference_name_and_unit(plan, machine);
+    in.start_ref = plan.start_ref;
+    in.end_ref = result.end_ref;
+    in.slow_factor = plan.slow_factor;
+    in.finished = result.finished;
+    in.warnings = result.warnings;
+    html->write(io::render_table_report_html(*report, summary.summary(), machine, in));
+  }
   if (csv) csv->commit();
   if (json) json->commit();
+  if (html) html->commit();
   std::cout << format_table_summary(summary.summary(), result, plan, machine);
   if (master && master_moving) {
     std::cout << "master        the program was still running when the tables ended (line "
@@ -231,6 +266,7 @@ int command_table(const TableArgs& a) {
   }
   if (csv) std::cout << "trajectory    " << a.trajectory << "\n";
   if (json) std::cout << "summary       " << a.summary << "\n";
+  if (html) std::cout << "report        " << a.report << "\n";
   return 0;
 }
 

@@ -8,12 +8,9 @@
 #include <numbers>
 #include <string_view>
 
-namespace cncore::io {
+#include "io/report_page.hpp"
 
-namespace assets {
-std::string_view uplot_js();  // generated from the npm package (report_web/assets.cmake)
-std::string_view uplot_css();
-}  // namespace assets
+namespace cncore::io {
 
 namespace {
 
@@ -53,49 +50,8 @@ std::pair<Vec3, Vec3> tangents(const Block& b) {
   return {unit(cross(n, b.start.xyz() - b.center)), unit(cross(n, re))};
 }
 
-std::string html_escape(std::string_view s) {
-  std::string o;
-  o.reserve(s.size());
-  for (const char c : s) {
-    switch (c) {
-      case '&':
-        o += "&amp;";
-        break;
-      case '<':
-        o += "&lt;";
-        break;
-      case '>':
-        o += "&gt;";
-        break;
-      case '"':
-        o += "&quot;";
-        break;
-      default:
-        o += c;
-    }
-  }
-  return o;
-}
-
-// Numbers for the page: 6 significant digits, null for NaN/inf (JSON has no NaN).
-void put_number(std::string& o, double v) {
-  if (!std::isfinite(v)) {
-    o += "null";
-  } else {
-    fmt::format_to(std::back_inserter(o), "{:.6g}", v);
-  }
-}
-
-template <typename F>
-std::string js_array(std::size_t n, F&& value) {
-  std::string o = "[";
-  o.reserve(n * 8 + 2);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (i > 0) o += ',';
-    put_number(o, value(i));
-  }
-  return o + "]";
-}
+using page::html_escape;
+using page::js_array;
 
 void merge_min(double& a, double b) {
   if (std::isnan(a) || b < a) a = b;
@@ -521,28 +477,12 @@ std::map<std::uint32_t, std::string> program_lines(const std::string& path,
   return out;
 }
 
-std::string basename_of(const std::string& path) {
-  const std::size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? path : path.substr(slash + 1);
-}
-
 // The page script: charts with uPlot, the top view on a canvas. Errors are caught and shown
 // on the page (and recorded in #cncore-status for the browser test).
 constexpr std::string_view kPageScript = R"JS(
 (function () {
   const D = window.CNCORE_DATA;
-  const status = document.getElementById('cncore-status');
-  function fmt(v, d) { return v == null ? '' : v.toFixed(d); }
-  const width = () => Math.max(480, Math.min(1100, document.body.clientWidth - 40));
-  const charts = [];
-  function chart(id, title, series, data, axes, scales) {
-    const el = document.getElementById(id);
-    const opts = {
-      title: title, width: width(), height: 300, series: series, axes: axes, scales: scales,
-      legend: { live: true }, cursor: { drag: { x: true, y: false } },
-    };
-    charts.push(new uPlot(opts, data, el));
-  }
+  const { fmt, width, chart } = window.cncore;
   const T = D.t;
   chart('speed-chart', 'Path speed', [
     { label: 't (s)', value: (u, v) => fmt(v, 3) },
@@ -617,26 +557,8 @@ constexpr std::string_view kPageScript = R"JS(
     ctx.fillText('X ' + x0.toFixed(1) + ' … ' + x1.toFixed(1) + ' mm,  Y ' + y0.toFixed(1) + ' … ' + y1.toFixed(1) + ' mm', pad, cv.height - 8);
   }
 
-  // For the browser test: how many canvases were drawn on (uPlot draws in a later task).
-  setTimeout(check, 50);
-  function check() {
-  let inked = 0;
-  const canvases = document.querySelectorAll('canvas');
-  canvases.forEach((c) => {
-    try {
-      const g = c.getContext('2d'), img = g.getImageData(0, 0, c.width, c.height).data;
-      let ink = 0;
-      for (let i = 0; i < img.length; i += 4) if (img[i + 3] > 0 && (img[i] < 250 || img[i + 1] < 250 || img[i + 2] < 250)) ink++;
-      if (ink > 100) inked++;
-    } catch (e) { window.cncoreErrors.push('canvas: ' + e); }
-  });
-  status.dataset.charts = String(charts.length);
-  status.dataset.canvases = String(canvases.length);
-  status.dataset.inked = String(inked);
-  status.dataset.errors = String(window.cncoreErrors.length);
-  status.dataset.rendered = window.cncoreErrors.length === 0 ? 'ok' : 'errors';
-  status.textContent = window.cncoreErrors.length === 0 ? '' : 'Errors: ' + window.cncoreErrors.join('; ');
-  }
+  // For the browser test (uPlot draws in a later task).
+  setTimeout(window.cncore.check, 50);
 })();
 )JS";
 
@@ -656,7 +578,7 @@ code { background: #f4f4f4; padding: 0 3px; } table.slow code { white-space: pre
 std::string render_report_html(const ReportObserver& report, const Summary& summary,
                                const MachineConfig& machine, const ReportInput& input) {
   const std::string title =
-      input.title.empty() ? "cncore report: " + basename_of(input.program) : input.title;
+      input.title.empty() ? "cncore report: " + page::basename_of(input.program) : input.title;
   const auto& bk = report.buckets();
   const std::vector<ReportSlowSpot> slow = report.slowest();
 
@@ -734,23 +656,11 @@ std::string render_report_html(const ReportObserver& report, const Summary& summ
 
   std::string o;
   o.reserve(data.size() + 120000);
-  o += "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n";
-  o += "<meta name=\"generator\" content=\"cncore\">\n";
-  o += "<title>" + html_escape(title) + "</title>\n<style>";
-  o += assets::uplot_css();
-  o += kStyle;
-  o += "</style>\n";
-  // Installed first, so that an error anywhere later is recorded.
-  o += "<script>window.cncoreErrors=[];window.addEventListener('error',function(e){"
-       "window.cncoreErrors.push(String(e.message));});"
-       "(function(){var c=console.error;console.error=function(){"
-       "window.cncoreErrors.push(Array.prototype.join.call(arguments,' '));"
-       "c.apply(console,arguments);};})();</script>\n";
-  o += "</head><body>\n";
+  o += page::head(title, kStyle);
   o += "<h1 id=\"title\">" + html_escape(title) + "</h1>\n";
   o += fmt::format("<div class=\"note\">program <code>{}</code>, machine {}</div>\n",
                    html_escape(input.program), html_escape(machine.name));
-  o += "<div id=\"cncore-status\"></div>\n";
+  o += page::kStatusDiv;
 
   o += "<h2>Summary</h2>\n<table id=\"summary\">\n";
   auto row = [&](const char* key, const std::string& label, double value, const std::string& text) {
@@ -826,13 +736,7 @@ std::string render_report_html(const ReportObserver& report, const Summary& summ
   o += "<div class=\"note\">Time lost: time on the line minus the time at the asked speed "
        "(programmed feed × override, capped by the machine). Charts: uPlot (MIT).</div>\n";
 
-  o += "<script>";
-  o += assets::uplot_js();
-  o += "</script>\n<script>";
-  o += data;
-  o += "</script>\n<script>";
-  o += kPageScript;
-  o += "</script>\n</body></html>\n";
+  o += page::tail(data, kPageScript);
   return o;
 }
 

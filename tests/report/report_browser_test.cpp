@@ -146,6 +146,30 @@ TEST_F(ReportBrowser, ChartsRenderWithoutErrorsAndShowTheRunsFigures) {
   EXPECT_EQ(rows, 10u);
 }
 
+// The table report (`cncore table … --report`): four charts (axis speeds, accelerations,
+// reference with the M codes, positions), drawn without errors.
+TEST_F(ReportBrowser, TableReportChartsRenderWithoutErrors) {
+  const fs::path html = dir_ / "fig6.html";
+  const std::string tables = std::string(CNCORE_SOURCE_DIR) + "/examples/tables/";
+  const std::string run = quote(CNCORE_BIN) + " table " + quote(tables + "fig6-x.tbl") + " " +
+                          quote(tables + "fig6-z.tbl") +
+                          " --var 501=0 --var 502=0 --var 503=0 --report " + quote(html.string()) +
+                          " > /dev/null 2>&1";
+  ASSERT_EQ(shell(run), 0) << run;
+  const std::string dom = dom_of(html);
+  ASSERT_FALSE(dom.empty()) << log_;
+  EXPECT_TRUE(console_errors().empty()) << console_errors().front();
+  EXPECT_EQ(attr(dom, "data-errors"), "0") << dom.substr(0, 2000);
+  EXPECT_EQ(attr(dom, "data-rendered"), "ok");
+  EXPECT_EQ(attr(dom, "data-charts"), "4");
+  EXPECT_EQ(attr(dom, "data-canvases"), "4");
+  EXPECT_EQ(attr(dom, "data-inked"), "4");
+  EXPECT_NE(dom.find("<title>cncore table report: fig6-x.tbl, fig6-z.tbl</title>"),
+            std::string::npos);
+  EXPECT_NE(dom.find("<td>M11</td>"), std::string::npos);
+  EXPECT_NE(dom.find("<td>M12</td>"), std::string::npos);
+}
+
 // The check above can fail: a page whose chart code throws is caught both in the page and in the
 // browser log.
 TEST_F(ReportBrowser, BrokenPageIsDetected) {

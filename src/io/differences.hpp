@@ -1,0 +1,93 @@
+// Velocities and accelerations of the servo set-points by finite differences: the one definition
+// the summary, the run report and the table report share, so that their figures agree.
+//   v_k = (p_k − p_{k−1}) / dt_k          per enabled axis, per s (at the middle of the interval)
+//   a_k = (v_k − v_{k−1}) / h_k,  h_k = (dt_k + dt_{k−1}) / 2   (distance between the midpoints)
+//   path: length |Δp| and speed |Δp| / dt over the enabled linear axes; tangential acceleration
+//   (speed_k − speed_{k−1}) / h_k; resultant |v_k − v_{k−1}| / h_k (normal part included).
+// A cycle with dt ≤ 0 changes nothing.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+
+#include "config/machine_config.hpp"
+#include "core/geometry.hpp"
+
+namespace cncore::io {
+
+struct CycleDifferences {
+  bool moved = false;  // dt > 0 this cycle: dt, vel, length and speed are valid
+  bool accel = false;  // moved and a previous velocity: h, acc and the accelerations are valid
+  double dt_s = 0, h_s = 0;
+  AxisVec vel;  // per s (mm/s or deg/s); 0 for disabled axes
+  AxisVec acc;  // per s² (signed)
+  double length_mm = 0, speed_mm_s = 0;
+  double tangential_accel_mm_s2 = 0;  // signed
+  double path_accel_mm_s2 = 0;        // resultant, ≥ 0
+};
+
+class FiniteDifferences {
+ public:
+  explicit FiniteDifferences(const MachineConfig& machine) {
+    for (std::size_t i = 0; i < kMaxAxes; ++i) {
+      enabled_[i] = machine.axes[i].enabled;
+      linear_[i] = machine.axes[i].enabled && !machine.axes[i].rotary;
+    }
+  }
+
+  // The next set-point; the result stays valid until the next call.
+  const CycleDifferences& update(double t_s, const AxisVec& position) {
+    d_.moved = d_.accel = false;
+    if (have_prev_) {
+      const double dt = t_s - prev_t_;
+      if (dt > 0) {
+        AxisVec vel;
+        double len2 = 0;
+        for (std::size_t i = 0; i < kMaxAxes; ++i) {
+          if (!enabled_[i]) continue;
+          const double d = position[i] - prev_pos_[i];
+          vel[i] = d / dt;
+          if (linear_[i]) len2 += d * d;
+        }
+        d_.moved = true;
+        d_.dt_s = dt;
+        d_.length_mm = std::sqrt(len2);
+        d_.speed_mm_s = d_.length_mm / dt;
+        if (have_vel_) {
+          const double h = 0.5 * (dt + prev_dt_);
+          double dv2 = 0;
+          for (std::size_t i = 0; i < kMaxAxes; ++i) {
+            if (!enabled_[i]) continue;
+            const double dv = vel[i] - d_.vel[i];
+            d_.acc[i] = dv / h;
+            if (linear_[i]) dv2 += dv * dv;
+          }
+          d_.accel = true;
+          d_.h_s = h;
+          d_.path_accel_mm_s2 = std::sqrt(dv2) / h;
+          d_.tangential_accel_mm_s2 = (d_.speed_mm_s - prev_speed_) / h;
+        }
+        d_.vel = vel;
+        prev_speed_ = d_.speed_mm_s;
+        prev_dt_ = dt;
+        have_vel_ = true;
+      }
+    }
+    prev_t_ = t_s;
+    prev_pos_ = position;
+    have_prev_ = true;
+    return d_;
+  }
+
+  const CycleDifferences& last() const { return d_; }
+
+ private:
+  bool enabled_[kMaxAxes] = {};
+  bool linear_[kMaxAxes] = {};
+  bool have_prev_ = false, have_vel_ = false;
+  double prev_t_ = 0, prev_dt_ = 0, prev_speed_ = 0;
+  AxisVec prev_pos_;
+  CycleDifferences d_;
+};
+
+}  // namespace cncore::io
