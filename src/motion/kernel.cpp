@@ -325,9 +325,14 @@ struct Kernel::Impl {
     in.or_ratio = cycle_or_ratio();
     in.hold = hold;
     in.stop_mm = stop_mm();
-    acc.step(in);
+    // The moving average through its final type: direct (inlined) calls, no virtual dispatch.
+    if (ma != nullptr) {
+      ma->step(in);
+    } else {
+      acc.step(in);
+    }
     clear_events(out);
-    const double tool = acc.tool_mm();
+    const double tool = ma != nullptr ? ma->tool_mm() : acc.tool_mm();
     advance_output(tool, out);
     path_position = interpolate(tool);
     if (out_idx < buf.end_index() && !buf.empty() && buf[out_idx].kind == ItemKind::kMotion) {
@@ -336,7 +341,7 @@ struct Kernel::Impl {
     post_filter(path_position);
     // Once the program has ended the producer stops asking wants_block(): retire here then.
     if (ended) retire();
-    fill(out, acc.tool_speed_pc());
+    fill(out, ma != nullptr ? ma->tool_speed_pc() : acc.tool_speed_pc());
     return true;
   }
 

@@ -74,11 +74,18 @@ void MovingAverageAccDec::on_joint(std::uint64_t index_a, const Segment& a, cons
   if (vg < std::max(a.vb_pc, b.vb_pc)) {
     vg = la_.insert(2 * slot, CapPoint{c, vg, false, span, c + vg * post}, cmd_mm_);
   }
-  const AxisVec before =
-      prev_.valid && prev_.index_b == index_a ? prev_.end_dir : a.end_direction();
-  const double vg_before = prev_.valid && prev_.index_b == index_a ? prev_.vg : kNoCap;
-  prev_ = {true, index_a,   buf_.end_index() - 1, a.end_direction(), before,
-           vg,   vg_before, a.length_mm < vg};
+  // prev_ ← {a → b}: field by field, in place (a whole-struct temporary of two AxisVecs costs a
+  // store-forwarding stall on every block).
+  const bool chained = prev_.valid && prev_.index_b == index_a;
+  const AxisVec a_end = a.end_direction();
+  prev_.end_dir2 = chained ? prev_.end_dir : a_end;
+  prev_.vg2 = chained ? prev_.vg : kNoCap;
+  prev_.valid = true;
+  prev_.index_a = index_a;
+  prev_.index_b = buf_.end_index() - 1;
+  prev_.end_dir = a_end;
+  prev_.vg = vg;
+  prev_.short_a = a.length_mm < vg;
   // Feed cap: where the programmed feed changes, the lower of the two feeds holds from the
   // range start until the tool has passed the joint (so the tool is never faster than the
   // feed of the block it is in).
