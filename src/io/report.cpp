@@ -64,7 +64,7 @@ void merge_max(double& a, double b) {
 
 ReportObserver::ReportObserver(const MachineConfig& machine, std::string mode,
                                ReportOptions options)
-    : machine_(machine), mode_(std::move(mode)), options_(options) {
+    : machine_(machine), mode_(std::move(mode)), options_(options), diff_(machine) {
   options_.buckets = std::max<std::size_t>(options_.buckets, 16);
   options_.path_points = std::max<std::size_t>(options_.path_points, 64);
   buckets_.reserve(2 * options_.buckets);
@@ -237,38 +237,13 @@ void ReportObserver::on_sample(const motion::Sample& s) {
   has_correction_ = has_correction_ || !std::isnan(s.correction);
   has_load_ = has_load_ || !std::isnan(s.load_pct);
 
-  double speed = 0, accel = 0, path_accel = 0, len = 0, dt = 0;
-  if (have_prev_) {
-    dt = s.t_s - prev_t_;
-    if (dt > 0) {
-      AxisVec vel;
-      double len2 = 0;
-      for (std::size_t i = 0; i < kMaxAxes; ++i) {
-        if (!machine_.axes[i].enabled) continue;
-        const double d = s.position[i] - prev_pos_[i];
-        vel[i] = d / dt;
-        if (!machine_.axes[i].rotary) len2 += d * d;
-      }
-      len = std::sqrt(len2);
-      speed = len / dt;  // mm/s
-      if (have_vel_) {
-        // a = (v_k − v_{k−1}) / (distance between the interval midpoints), as in the summary.
-        const double h = 0.5 * (dt + prev_dt_);
-        double dv2 = 0;
-        for (std::size_t i = 0; i < kMaxAxes; ++i) {
-          if (!machine_.axes[i].enabled || machine_.axes[i].rotary) continue;
-          dv2 += (vel[i] - prev_vel_[i]) * (vel[i] - prev_vel_[i]);
-        }
-        accel = (speed - prev_speed_) / h;
-        path_accel = std::sqrt(dv2) / h;
-      }
-      prev_vel_ = vel;
-      prev_speed_ = speed;
-      prev_dt_ = dt;
-      have_vel_ = true;
-    }
-  }
-  prev_pos_ = s.position;
+  // Finite differences as in the summary (io/differences.hpp); 0 until known.
+  const double dt = have_prev_ ? s.t_s - prev_t_ : 0.0;
+  const CycleDifferences& d = diff_.update(s.t_s, s.position);
+  const double speed = d.moved ? d.speed_mm_s : 0;  // mm/s
+  const double len = d.moved ? d.length_mm : 0;
+  const double accel = d.accel ? d.tangential_accel_mm_s2 : 0;
+  const double path_accel = d.accel ? d.path_accel_mm_s2 : 0;
   prev_t_ = s.t_s;
   have_prev_ = true;
   const double speed_mm_min = speed * 60;

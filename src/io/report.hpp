@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "config/machine_config.hpp"
+#include "io/differences.hpp"
 #include "io/summary.hpp"
 #include "simulation/run.hpp"
 
@@ -125,10 +126,9 @@ class ReportObserver : public sim::SampleObserver {
   Vec3 last_tangent_{};
   bool have_tangent_ = false;
   bool stop_pending_ = true;
-  // Finite differences (same definitions as the summary).
-  bool have_prev_ = false, have_vel_ = false;
-  double prev_t_ = 0, prev_dt_ = 0, prev_speed_ = 0;
-  AxisVec prev_pos_, prev_vel_;
+  FiniteDifferences diff_;  // same definitions as the summary
+  bool have_prev_ = false;
+  double prev_t_ = 0;  // time of the last sample
   Group group_;
   std::vector<ReportSlowSpot> top_;  // bounded, merged by line
   std::uint64_t samples_ = 0;

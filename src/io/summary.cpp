@@ -34,7 +34,7 @@ double segment_distance(Vec3 p, Vec3 a, Vec3 b) {
 }  // namespace
 
 SummaryObserver::SummaryObserver(const MachineConfig& machine, std::string mode)
-    : machine_(machine) {
+    : machine_(machine), diff_(machine) {
   summary_.mode = std::move(mode);
   // Window of on-path points searched for the contour error: the post-interpolation filter
   // delays the set-point by at most its length; keep at least 20 ms in case the kernel smooths
@@ -177,38 +177,30 @@ void SummaryObserver::on_sample(const motion::Sample& s) {
   }
   summary_.max_contour_error_mm = std::max(summary_.max_contour_error_mm, contour);
 
-  if (have_prev_) {
-    const double dt = s.t_s - prev_t_;
-    if (dt > 0) {
-      // Velocity over the last cycle (at the middle of the interval).
-      AxisVec vel;
-      double len2 = 0;
+  {
+    // Velocity over the last cycle (at the middle of the interval) and second differences
+    // a = (v_k − v_{k−1}) / (distance between interval midpoints): io/differences.hpp.
+    const CycleDifferences& d = diff_.update(s.t_s, s.position);
+    if (d.moved) {
+      const double dt = d.dt_s;
       for (std::size_t i = 0; i < kMaxAxes; ++i) {
         if (!machine_.axes[i].enabled) continue;
-        const double d = s.position[i] - prev_pos_[i];
-        vel[i] = d / dt;
-        if (!machine_.axes[i].rotary) len2 += d * d;
         summary_.max_axis_speed_mm_min[i] =
-            std::max(summary_.max_axis_speed_mm_min[i], std::fabs(vel[i]) * 60);
+            std::max(summary_.max_axis_speed_mm_min[i], std::fabs(d.vel[i]) * 60);
       }
-      const double len = std::sqrt(len2);
-      const double speed = len / dt;  // mm/s
+      const double len = d.length_mm;
+      const double speed = d.speed_mm_s;  // mm/s
       summary_.path_length_mm += len;
       summary_.max_feed_mm_min = std::max(summary_.max_feed_mm_min, speed * 60);
-      if (have_vel_) {
-        // Second differences: a = (v_k − v_{k−1}) / (distance between interval midpoints).
-        const double h = 0.5 * (dt + prev_dt_);
-        double dv2 = 0;
+      if (d.accel) {
         for (std::size_t i = 0; i < kMaxAxes; ++i) {
           if (!machine_.axes[i].enabled) continue;
-          const double dv = vel[i] - prev_vel_[i];
           summary_.max_axis_accel_mm_s2[i] =
-              std::max(summary_.max_axis_accel_mm_s2[i], std::fabs(dv) / h);
-          if (!machine_.axes[i].rotary) dv2 += dv * dv;
+              std::max(summary_.max_axis_accel_mm_s2[i], std::fabs(d.acc[i]));
         }
-        summary_.max_path_accel_mm_s2 = std::max(summary_.max_path_accel_mm_s2, std::sqrt(dv2) / h);
+        summary_.max_path_accel_mm_s2 = std::max(summary_.max_path_accel_mm_s2, d.path_accel_mm_s2);
         summary_.max_tangential_accel_mm_s2 =
-            std::max(summary_.max_tangential_accel_mm_s2, std::fabs(speed - prev_speed_) / h);
+            std::max(summary_.max_tangential_accel_mm_s2, std::fabs(d.tangential_accel_mm_s2));
       }
       // Slowest spots: time lost on this line against its programmed feed × override.
       if (s.line != group_.line) {
@@ -225,15 +217,8 @@ void SummaryObserver::on_sample(const motion::Sample& s) {
           if (target > 0 && speed * 60 < target) group_.lost_s += dt * (1 - speed * 60 / target);
         }
       }
-      prev_vel_ = vel;
-      prev_speed_ = speed;
-      prev_dt_ = dt;
-      have_vel_ = true;
     }
   }
-  prev_t_ = s.t_s;
-  prev_pos_ = s.position;
-  have_prev_ = true;
 }
 
 void SummaryObserver::on_finish() {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "config/machine_config.hpp"
+#include "io/differences.hpp"
 #include "simulation/run.hpp"
 
 namespace cncore::io {
@@ -116,12 +117,7 @@ class SummaryObserver : public sim::SampleObserver {
   // Programmed feed of the blocks handed to the kernel and not yet executed (bounded by the
   // kernel's buffer capacity).
   std::deque<Pending> pending_;
-  // Finite-difference state.
-  bool have_prev_ = false, have_vel_ = false;
-  double prev_t_ = 0, prev_dt_ = 0;
-  AxisVec prev_pos_;
-  AxisVec prev_vel_;  // per second
-  double prev_speed_ = 0;
+  FiniteDifferences diff_;  // velocities and accelerations of the set-points
   // Recent on-path points: the servo set-point lags behind on the path (post-interpolation
   // filter), so its contour error is the distance to the nearest of these path segments.
   std::vector<Vec3> path_ring_;

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "config/machine_config.hpp"
+#include "files.hpp"
 
 namespace {
 
@@ -25,17 +26,8 @@ struct Result {
   std::string out, err;
 };
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-void write(const fs::path& p, const std::string& text) {
-  std::ofstream f(p, std::ios::binary);
-  f << text;
-}
+using cncore::testing::slurp;
+using cncore::testing::write_file;
 
 std::vector<std::string> list_dir(const fs::path& dir) {
   std::vector<std::string> names;
@@ -123,7 +115,7 @@ TEST_F(Cli, VersionAndHelpOnEveryCommand) {
 }
 
 TEST_F(Cli, UsageErrorsExitTwo) {
-  write(dir_ / "p.ngc", "G1 X1 F100\nM30\n");
+  write_file(dir_ / "p.ngc", "G1 X1 F100\nM30\n");
   for (const char* args :
        {"", "frobnicate", "run", "run p.ngc --no-such-option", "run p.ngc --mode fast",
         "run p.ngc --override abc", "run p.ngc --override 500", "run p.ngc --override -1",
@@ -146,7 +138,7 @@ TEST_F(Cli, MachinePrintsTheBuiltInAsParsableToml) {
   EXPECT_EQ(cncore::parse_machine_config(r.out, "stdout"), cncore::default_machine_config());
   EXPECT_NE(r.out.find("period_s = 0.001"), std::string::npos);
   // An edited copy prints as the effective configuration.
-  write(dir_ / "m.toml", "[motion]\nmax_feed_mm_min = 5000\n");
+  write_file(dir_ / "m.toml", "[motion]\nmax_feed_mm_min = 5000\n");
   const Result e = run("machine --machine m.toml");
   ASSERT_EQ(e.code, 0) << e.err;
   cncore::MachineConfig expected = cncore::default_machine_config();
@@ -155,8 +147,8 @@ TEST_F(Cli, MachinePrintsTheBuiltInAsParsableToml) {
 }
 
 TEST_F(Cli, BadConfigIsExitOneWithFileLineColumnAndKey) {
-  write(dir_ / "m.toml", "[motion]\nperiod_s = 0.001\nmax_accel_mm_s2 = 0\n");
-  write(dir_ / "p.ngc", "G1 X1 F100\nM30\n");
+  write_file(dir_ / "m.toml", "[motion]\nperiod_s = 0.001\nmax_accel_mm_s2 = 0\n");
+  write_file(dir_ / "p.ngc", "G1 X1 F100\nM30\n");
   const Result m = run("machine --machine m.toml");
   EXPECT_EQ(m.code, 1);
   EXPECT_EQ(m.err.rfind("m.toml:3:1: error: ", 0), 0u) << m.err;
@@ -164,7 +156,7 @@ TEST_F(Cli, BadConfigIsExitOneWithFileLineColumnAndKey) {
   const Result r = run("run p.ngc --machine m.toml --trajectory t.csv --summary s.json");
   EXPECT_EQ(r.code, 1);
   EXPECT_EQ(r.err.rfind("m.toml:3:1: error: ", 0), 0u) << r.err;
-  write(dir_ / "syntax.toml", "[motion]\nperiod_s = = 1\n");
+  write_file(dir_ / "syntax.toml", "[motion]\nperiod_s = = 1\n");
   const Result s = run("machine --machine syntax.toml");
   EXPECT_EQ(s.code, 1);
   EXPECT_EQ(s.err.rfind("syntax.toml:2:12: error: ", 0), 0u) << s.err;
@@ -179,7 +171,7 @@ TEST_F(Cli, MissingProgramIsExitOneCannotOpen) {
   const Result d = run("run adir");
   EXPECT_EQ(d.code, 1);
   EXPECT_EQ(d.err.rfind("adir:0:0: error: cannot open", 0), 0u) << d.err;
-  write(dir_ / "p.ngc", "G1 X1 F100\n");
+  write_file(dir_ / "p.ngc", "G1 X1 F100\n");
   const Result m = run("run p.ngc --machine adir");
   EXPECT_EQ(m.code, 1);
   EXPECT_EQ(m.err.rfind("adir:0:0: error: cannot open", 0), 0u) << m.err;
@@ -193,7 +185,7 @@ TEST_F(Cli, MissingProgramIsExitOneCannotOpen) {
 
 TEST_F(Cli, BadProgramIsExitOneWithFileLineColumn) {
   // Two words of the motion modal group in one block (line 3).
-  write(dir_ / "bad.ngc", "G21 G90\nG1 X10 F1000\nG0 G1 X20\nM30\n");
+  write_file(dir_ / "bad.ngc", "G21 G90\nG1 X10 F1000\nG0 G1 X20\nM30\n");
   for (const char* cmd : {"check bad.ngc", "run bad.ngc"}) {
     const Result r = run(cmd);
     EXPECT_EQ(r.code, 1) << cmd << "\n" << r.err;
@@ -204,7 +196,7 @@ TEST_F(Cli, BadProgramIsExitOneWithFileLineColumn) {
 
 TEST_F(Cli, CheckReportsEveryErrorWithItsLine) {
   // Errors on lines 2 (unknown word), 4 (two motion words) and 6 (division by zero, at the /).
-  write(dir_ / "many.ngc", "G21 G90 G1 F1000\nX10 E5\nX20\nG0 G1 X30\nX40\nX[1/0]\nM30\n");
+  write_file(dir_ / "many.ngc", "G21 G90 G1 F1000\nX10 E5\nX20\nG0 G1 X30\nX40\nX[1/0]\nM30\n");
   const Result r = run("check many.ngc --blocks");
   EXPECT_EQ(r.code, 1) << r.err;
   std::vector<std::string> lines;
@@ -221,7 +213,7 @@ TEST_F(Cli, ErrorAtTheLastLineLeavesNoOutputAndNoTemporary) {
   std::string program = "G21 G90 G17\nG1 X10 F3000\n";
   for (int i = 0; i < 200; ++i) program += i % 2 ? "G1 X10\n" : "G1 X20\n";
   program += "G2 X30 Y10\n";  // arc without centre or radius: an error at the last line
-  write(dir_ / "late.ngc", program);
+  write_file(dir_ / "late.ngc", program);
   const Result r = run("run late.ngc --trajectory t.csv --summary s.json");
   EXPECT_EQ(r.code, 1) << r.err;
   EXPECT_EQ(r.err.rfind("late.ngc:203:", 0), 0u) << r.err;
@@ -233,7 +225,7 @@ TEST_F(Cli, InterruptedRunLeavesNoTemporary) {
   std::string program = "G21 G90 G17 F6000\n";
   for (int i = 0; i < 20000; ++i) program += i % 2 ? "G1 X0\n" : "G1 X1\n";
   program += "M30\n";
-  write(dir_ / "long.ngc", program);
+  write_file(dir_ / "long.ngc", program);
   for (const char* sig : {"TERM", "HUP"}) {  // a background job ignores SIGINT
     const std::string cmd = "cd " + quote(dir_.string()) + " && (" + quote(CNCORE_BIN) +
                             " run long.ngc --mode stop --trajectory t.csv --summary s.json"
@@ -261,7 +253,7 @@ TEST_F(Cli, CheckListsTheBlocks) {
   const auto lines = std::count(r.out.begin(), r.out.end(), '\n');
   EXPECT_GE(lines, 3);  // line, arc, line (+ the M30 event if listed)
   // On an error the blocks before it are still listed.
-  write(dir_ / "e.ngc", "G1 X1 F100\nG1 X2\nG2 X3\n");
+  write_file(dir_ / "e.ngc", "G1 X1 F100\nG1 X2\nG2 X3\n");
   const Result e = run("check --blocks e.ngc");
   EXPECT_EQ(e.code, 1);
   EXPECT_EQ(std::count(e.out.begin(), e.out.end(), '\n'), 2) << e.out;
@@ -311,7 +303,7 @@ TEST_F(Cli, RunWritesTrajectoryFromStartToProgrammedEnd) {
 
 TEST_F(Cli, VariablesParametersAndInchesReachTheTrajectory) {
   // X from a named parameter, Y from a numbered one, Z in inches: ends at 12, 7, −25.4·0.5.
-  write(dir_ / "p.ngc", "G21 G90\nG1 X#<dist> Y#1 F3000\nG20\nG1 Z-0.5 F20\nM30\n");
+  write_file(dir_ / "p.ngc", "G21 G90\nG1 X#<dist> Y#1 F3000\nG20\nG1 Z-0.5 F20\nM30\n");
   const Result r = run("run p.ngc --var dist=12 --param 1=7 --trajectory t.csv");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto rows = read_csv(dir_ / "t.csv");
@@ -429,8 +421,8 @@ TEST_F(Cli, TableFig2CancelModeFromTheMachineConfiguration) {
   EXPECT_NEAR(time_reaching(c, "x", 300), 3.0, 1e-9);
   EXPECT_NEAR(time_reaching(c, "x", 400), 4.0, 1e-9);
 
-  write(dir_ / "rebase.toml",
-        "[tables]\ncancel_mode = \"rebase\"\n[axes.x]\nmin_mm = -50\nmax_mm = 450\n");
+  write_file(dir_ / "rebase.toml",
+             "[tables]\ncancel_mode = \"rebase\"\n[axes.x]\nmin_mm = -50\nmax_mm = 450\n");
   const Result rebase = run("table " + tables_example("fig2c-cancel.tbl") +
                             " --machine rebase.toml --trajectory rebase.csv --print-effective");
   ASSERT_EQ(rebase.code, 0) << rebase.err;
@@ -440,7 +432,7 @@ TEST_F(Cli, TableFig2CancelModeFromTheMachineConfiguration) {
   EXPECT_NEAR(time_reaching(b, "x", 300), 2.5, 1e-9);
   EXPECT_NEAR(time_reaching(b, "x", 400), 3.5, 1e-9);
 
-  write(dir_ / "bad.toml", "[tables]\ncancel_mode = \"keep\"\n");
+  write_file(dir_ / "bad.toml", "[tables]\ncancel_mode = \"keep\"\n");
   const Result bad = run("table " + tables_example("fig2c-cancel.tbl") + " --machine bad.toml");
   EXPECT_EQ(bad.code, 1);
   EXPECT_EQ(bad.err.rfind("bad.toml:2:1: error:", 0), 0u) << bad.err;
@@ -484,14 +476,14 @@ TEST_F(Cli, TableFig6MacroVariablesOverlapTheCornerAndEndEarlier) {
 }
 
 TEST_F(Cli, TableParameterAndSignalAmounts) {
-  write(dir_ / "p.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=P5\nL3000 X300\n");
+  write_file(dir_ / "p.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=P5\nL3000 X300\n");
   const Result p = run("table p.tbl --param 5=-300 --trajectory p.csv");
   ASSERT_EQ(p.code, 0) << p.err;
   const auto pr = read_csv(dir_ / "p.csv");
   EXPECT_NEAR(time_reaching(pr, "x", 200), 1.7, 1e-9);
   EXPECT_NEAR(time_reaching(pr, "x", 300), 2.7, 1e-9);
 
-  write(dir_ / "r.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=R1001\nL3000 X300\n");
+  write_file(dir_ / "r.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=R1001\nL3000 X300\n");
   const Result r = run("table r.tbl --signal R1001=-200 --trajectory r.csv");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NEAR(time_reaching(read_csv(dir_ / "r.csv"), "x", 200), 1.8, 1e-9);
@@ -512,19 +504,19 @@ TEST_F(Cli, TableParameterAndSignalAmounts) {
 
 TEST_F(Cli, BadTableIsExitOneWithFileLineColumnAndNoOutput) {
   // The shift takes the second point back before the first: 2000 − 1500 = 500 < 1000.
-  write(dir_ / "back.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT-1500\n");
+  write_file(dir_ / "back.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT-1500\n");
   const Result back = run("table back.tbl --trajectory t.csv --summary s.json");
   EXPECT_EQ(back.code, 1);
   EXPECT_EQ(back.err.rfind("back.tbl:4:1: error:", 0), 0u) << back.err;
   EXPECT_EQ(back.out, "");
-  write(dir_ / "addr.tbl", "REF TIME\nAXES X\nL1000 X100 Q5\n");
+  write_file(dir_ / "addr.tbl", "REF TIME\nAXES X\nL1000 X100 Q5\n");
   const Result addr = run("table addr.tbl --trajectory t.csv --summary s.json");
   EXPECT_EQ(addr.code, 1);
   EXPECT_EQ(addr.err.rfind("addr.tbl:3:12: error:", 0), 0u) << addr.err;
   // Nothing written, no temporaries left behind.
   EXPECT_EQ(list_dir(dir_), (std::vector<std::string>{"addr.tbl", "back.tbl"}));
   // An axis the machine does not have (the built-in mill has no B).
-  write(dir_ / "b.tbl", "REF TIME\nAXES B\nL1000 B10\n");
+  write_file(dir_ / "b.tbl", "REF TIME\nAXES B\nL1000 B10\n");
   const Result axis = run("table b.tbl --trajectory t.csv");
   EXPECT_EQ(axis.code, 1);
   EXPECT_EQ(axis.err.rfind("b.tbl:", 0), 0u) << axis.err;
@@ -558,7 +550,7 @@ TEST_F(Cli, TableSpindleReferenceNeedsTheSpeed) {
 
 TEST_F(Cli, TableMasterAxisAndSignalChangeDuringTheRun) {
   // X follows Z: Z moves from its start 0 at 600 mm/min = 10 mm/s, so Z = 50 (X = 10) at 5 s.
-  write(dir_ / "ax.tbl", "REF AXIS Z\nAXES X\nL50 X10\nL100 X20\n");
+  write_file(dir_ / "ax.tbl", "REF AXIS Z\nAXES X\nL50 X10\nL100 X20\n");
   const Result r = run("table ax.tbl" + kLathe + " --master-speed 600 --trajectory ax.csv");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto rows = read_csv(dir_ / "ax.csv");
@@ -572,7 +564,7 @@ TEST_F(Cli, TableMasterAxisAndSignalChangeDuringTheRun) {
 
   // R1 changes to −1500 at 0.5 s; the row L2000 SFT=R1 is read later and goes back to 500 ms:
   // the error comes during the run, and still no output is left.
-  write(dir_ / "late.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=R1\nL3000 X300\n");
+  write_file(dir_ / "late.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=R1\nL3000 X300\n");
   const Result late = run(
       "table late.tbl --signal R1=0 --signal-at 0.5:R1=-1500 --trajectory t.csv --summary s.json");
   EXPECT_EQ(late.code, 1);
@@ -582,14 +574,14 @@ TEST_F(Cli, TableMasterAxisAndSignalChangeDuringTheRun) {
 
 TEST_F(Cli, TableOverTheAxisSpeedIsRefusedOrSlowedToFit) {
   // 100 mm in 100 ms = 60 000 mm/min; the built-in X allows 15 000 mm/min (4 times less).
-  write(dir_ / "fast.tbl", "REF TIME\nAXES X\nL100 X100\n");
+  write_file(dir_ / "fast.tbl", "REF TIME\nAXES X\nL100 X100\n");
   const Result refused = run("table fast.tbl --trajectory t.csv");
   EXPECT_EQ(refused.code, 1);
   EXPECT_NE(refused.err.find("fast.tbl:3:1: error: X speed 60000 mm/min"), std::string::npos)
       << refused.err;
   EXPECT_FALSE(fs::exists(dir_ / "t.csv"));
 
-  write(dir_ / "slow.toml", "[tables]\nslow_to_fit = true\n");
+  write_file(dir_ / "slow.toml", "[tables]\nslow_to_fit = true\n");
   const Result slowed =
       run("table fast.tbl --machine slow.toml --trajectory t.csv --summary s.json");
   ASSERT_EQ(slowed.code, 0) << slowed.err;
@@ -605,8 +597,8 @@ TEST_F(Cli, TableOverTheAxisSpeedIsRefusedOrSlowedToFit) {
 
 TEST_F(Cli, TableMasterAxisMovedByAPartProgramAndMCodesFire) {
   // An electronic cam: Y follows X (Y = X / 5), X is moved by a part program that also lifts Z.
-  write(dir_ / "cam.tbl", "REF AXIS X\nAXES Y\nL0 Y0\nL50 Y10 M8\nL100 Y20 M9\n");
-  write(dir_ / "master.ngc", "G21 G90 G1 F3000 Z5\nX100\nM2\n");
+  write_file(dir_ / "cam.tbl", "REF AXIS X\nAXES Y\nL0 Y0\nL50 Y10 M8\nL100 Y20 M9\n");
+  write_file(dir_ / "master.ngc", "G21 G90 G1 F3000 Z5\nX100\nM2\n");
   const Result r =
       run("table cam.tbl --master-program master.ngc --trajectory cam.csv --summary cam.json");
   ASSERT_EQ(r.code, 0) << r.err;
@@ -647,23 +639,23 @@ TEST_F(Cli, TableMasterAxisMovedByAPartProgramAndMCodesFire) {
   EXPECT_EQ(r.out.find("path speed"), std::string::npos) << r.out;
 
   // An error in the master program: exit 1 with its FILE:LINE:COL, nothing written.
-  write(dir_ / "bad.ngc", "G21 G90 G1 F3000\nX40\nG1 X60 Q\n");
+  write_file(dir_ / "bad.ngc", "G21 G90 G1 F3000\nX40\nG1 X60 Q\n");
   const Result bad = run("table cam.tbl --master-program bad.ngc --trajectory b.csv");
   EXPECT_EQ(bad.code, 1);
   EXPECT_NE(bad.err.find("bad.ngc:3:"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(dir_ / "b.csv"));
   // A master program needs REF AXIS.
-  write(dir_ / "time.tbl", "REF TIME\nAXES X\nL1000 X10\n");
+  write_file(dir_ / "time.tbl", "REF TIME\nAXES X\nL1000 X10\n");
   EXPECT_EQ(run("table time.tbl --master-program master.ngc").code, 2);
 }
 
 TEST_F(Cli, TableAmountsFromTheMachineConfigurationAndTheCommandLineOverridesThem) {
-  write(dir_ / "m.toml",
-        "[tables.parameters]\n5 = -300\n[tables.variables]\n501 = -200\n"
-        "[tables.signals]\n1001 = -400\n");
-  write(dir_ / "all.tbl",
-        "REF TIME\nAXES X\nL1000 X10\nL2000 X20 SFT=P5\nL3000 X30 SFT=#501\n"
-        "L4000 X40 SFT=R1001\nL5000 X50\n");
+  write_file(dir_ / "m.toml",
+             "[tables.parameters]\n5 = -300\n[tables.variables]\n501 = -200\n"
+             "[tables.signals]\n1001 = -400\n");
+  write_file(dir_ / "all.tbl",
+             "REF TIME\nAXES X\nL1000 X10\nL2000 X20 SFT=P5\nL3000 X30 SFT=#501\n"
+             "L4000 X40 SFT=R1001\nL5000 X50\n");
   // Shifts accumulate: −300 from row 4, −500 from row 5, −900 from row 6.
   const Result r = run("table all.tbl --machine m.toml --trajectory a.csv");
   ASSERT_EQ(r.code, 0) << r.err;
@@ -682,12 +674,12 @@ TEST_F(Cli, TableAmountsFromTheMachineConfigurationAndTheCommandLineOverridesThe
   const Result printed = run("machine --machine m.toml");
   ASSERT_EQ(printed.code, 0) << printed.err;
   EXPECT_NE(printed.out.find("[tables.variables]\n501 = -200\n"), std::string::npos) << printed.out;
-  write(dir_ / "again.toml", printed.out);
+  write_file(dir_ / "again.toml", printed.out);
   const Result again = run("table all.tbl --machine again.toml --trajectory b.csv");
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_EQ(slurp(dir_ / "b.csv"), slurp(dir_ / "a.csv"));
   // A key that is not a number: FILE:LINE:COL naming it.
-  write(dir_ / "bad.toml", "[tables.parameters]\nP5 = -300\n");
+  write_file(dir_ / "bad.toml", "[tables.parameters]\nP5 = -300\n");
   const Result bad = run("table all.tbl --machine bad.toml");
   EXPECT_EQ(bad.code, 1);
   EXPECT_EQ(bad.err.rfind("bad.toml:2:1: error: tables.parameters: key 'P5'", 0), 0u) << bad.err;

@@ -5,10 +5,10 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
+
+#include "files.hpp"
 
 namespace cncore::test {
 
@@ -30,11 +30,6 @@ inline std::vector<std::string> list_dir(const std::filesystem::path& dir) {
   return names;
 }
 
-inline std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using cncore::testing::slurp;
 
 }  // namespace cncore::test
