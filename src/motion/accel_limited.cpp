@@ -61,7 +61,9 @@
 //    x ≤ V. Its bound is V at c − V and may reach 0 just before c when V < A0 (the last lattice
 //    step can be larger than V and then lands short of c), so such a cap is active from c − V.
 //
-// 4. Forward pass = the cycle:  u = min(u_prev + r·A0, caps active, B(min K), stop bound);
+// 4. Forward pass = the cycle:  u = min(u_prev + r·A0, caps active, B(min K), stop bound), r the
+// lowest
+//    over where the step can go (segments and joint zones, 7.);
 //    while a corner cap is active the speed does not rise (the turn uses the axis budget).
 //
 // 5. Feed caps and the override. A feed cap's V is OR·F and OR may change at any cycle, so its
@@ -84,6 +86,37 @@
 //    A0 (F·OR < 2 mm/s on the built-in machine) arriving late at the tail: its first step may
 //    be up to A0.
 //
+// 7. Joint zones: a turn and a speed change in the same cycles. Samples P[k] = p(s_k) on a path
+//    with one corner at j (unit tangents E before, S after), steps u1 = s_k − s_{k−1} and
+//    u2 = s_{k+1} − s_k with j in [s_{k−1}, s_{k+1}]: with α the part of step 1 after j and β the
+//    part of step 2 before j,  P[k+1] − 2P[k] + P[k−1] = (u2 − u1)·S + c·(S − E), c = u1 − α − β,
+//    c ∈ [min(0, u1 − u2), u1] (= (u2 − u1)·E + c'·(S − E) with c' ∈ [0, max(u1, u2)]). So per
+//    axis, with u1, u2 ≤ V and |u2 − u1| ≤ D:
+//        |Δ²P_i| ≤ V·|S_i − E_i| + D·min(|S_i|, |E_i|) ≤ a_i.
+//    The corner limit alone uses the whole budget for the turn (V·|S_i − E_i| ≤ a_i), and the
+//    segments' r alone the whole budget for the speed change (D·|E_i| ≤ a_i): on a diagonal path
+//    with axis limits = Amax both land on the same axis (measured up to 1.38 × the limit at
+//    gentle corners). So every joint without a stop gets a *zone* in which r is lowered to
+//        r_j = min(r_a, r_b, min_i (a_i − V0·|S_i − E_i|) / (A0·min(|S_i|, |E_i|))),
+//    V0 = the corner's passing speed (or the segments' caps where the corner allows more). When
+//    r_j would fall below kZoneFloor·min(r_a, r_b), D = that floor and the corner is passed
+//    slower instead, V_j = min_i (a_i − D·min(|S_i|, |E_i|)) / |S_i − E_i| (a joint cap).
+//    The zone covers [j − 2V, j + V] (V: the largest step near the joint, V_j or the segments'
+//    caps): the speed change u2 − u1 of a pair around j is
+//      - for an increase, ≤ A0 × the lowest r over where step 2 can go (step()), and step 2
+//        starts in [j − V, j + V];
+//      - for a decrease by a braking bound, ≤ A0 × the mean r over step 1 (3. (ii), in the
+//        lattice forms the same: (1/2 − ρ)² ≤ 1/4), and step 1 lies in [j − 2V, j + V].
+//    The zone is part of σ, so every braking plan already accounts for it; a feed limit is
+//    followed exactly (no extra deceleration step) unless the override was just lowered.
+//    A zone lowers r on the tail of a (and of up to kZoneWalk earlier short segments) when b
+//    arrives: σ after the first changed segment moves, so the starts of the later segments,
+//    the window's end and the keys of the caps from there on are recomputed with the exact
+//    σ(c) (a bounded number of caps per joint). Never under or behind the tool (a late joint).
+//    Keys use the exact σ(c) (a σ below the true one lets the bound reach 0 before c, a stall).
+//    Not covered: a zone reaching back over more than kZoneWalk segments (tiny segments with a
+//    sharp corner: the corner cap then keeps V small, so 2V spans few of them).
+//
 // No filter follows, so the tool position is the commanded position and at rest means step 0.
 #include "motion/accel_limited.hpp"
 
@@ -100,6 +133,10 @@ using planner::Segment;
 namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kArcNormalShare = 0.95;  // a_n ≤ 0.95·g on arcs where the axes couple
+// Joint zones (7.): the speed change allowed at a joint is at least this share of the segments'
+// (below it, the corner's passing speed is lowered instead).
+constexpr double kZoneFloor = 0.25;
+constexpr std::size_t kZoneWalk = 16;  // segments a joint zone may reach back over
 
 // The largest step x from which the tool can still stop exactly at distance d with steps that
 // shrink by at most a per cycle: x + (x − a) + (x − 2a) + … (positive terms, the last one ≤ a
@@ -131,6 +168,11 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       sigma0_(buffer.capacity(), 0.0),
       ratio_(buffer.capacity(), 1.0),
       vcap_(buffer.capacity(), 0.0),
+      len_mm_(buffer.capacity(), 0.0),
+      head_mm_(buffer.capacity(), 0.0),
+      head_r_(buffer.capacity(), 1.0),
+      tail_mm_(buffer.capacity(), 0.0),
+      tail_r_(buffer.capacity(), 1.0),
       caps_(3 * buffer.capacity()),
       state_(3 * buffer.capacity(), State::kEmpty),
       entry_(3 * buffer.capacity()),
@@ -186,12 +228,20 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
     }
   }
   r = std::max(r, 1e-6);
-  sigma0_[slot] = sigma_total_;
   ratio_[slot] = r;
   vcap_[slot] = vcap;
-  sigma_total_ += r * s.length_mm;
+  len_mm_[slot] = s.length_mm;
+  head_mm_[slot] = tail_mm_[slot] = 0;
+  head_r_[slot] = tail_r_[slot] = 1;
 
   const bool contiguous = have_prev_ && prev_end_mm_ == s.s0_mm;
+  // A joint (the kernel calls on_joint next) unless an event that stops lies between.
+  bool joint = contiguous && prev_index_ >= buf_.begin_index() &&
+               buf_[prev_index_].kind == ItemKind::kMotion;
+  for (std::uint64_t k = prev_index_ + 1; joint && k < index; ++k) joint = !buf_[k].barrier;
+  if (joint) joint_zones(prev_index_, slot, s);
+  sigma0_[slot] = sigma_total_;
+  sigma_total_ += seg_sigma(slot, s.length_mm);
   const Cap caps[2] = {{s.s0_mm, s.end_mm(), vcap, sigma0_[slot], false, vcap >= a0_},
                        {s.s0_mm, s.end_mm(), s.feed_pc, sigma0_[slot], true, false}};
   for (std::size_t k = 0; k < 2; ++k) {
@@ -217,13 +267,21 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   prev_end_mm_ = s.end_mm();
 }
 
-void AccelLimitedAccDec::insert_joint_cap(std::size_t slot_a, double joint_mm, double sigma_joint,
-                                          double ratio_a, double len_a, double vg) {
-  // σ(j − Vg): exact inside a; before a, σ(j) − Vg is smaller (r ≤ 1), so K stays strict.
-  const double sigma_c = vg <= len_a ? sigma_joint - ratio_a * vg : sigma_joint - vg;
-  // Lattice form where it cannot stall before the cap takes over (see 3.).
-  const bool lattice = vg >= a0_ || (vg >= 0.5 * a0_ && ratio_a >= 0.5 && len_a >= 2 * vg);
-  insert(3 * slot_a + 2, Cap{joint_mm - vg, joint_mm + vg, vg, sigma_c, false, lattice});
+void AccelLimitedAccDec::insert_joint_cap(std::size_t slot_a, std::size_t slot_b, double joint_mm,
+                                          double len_a, double vg) {
+  // σ(j − Vg), exact (inside a directly, before a by a search of the buffer): a key with a σ
+  // lower than the true σ(c) would make the bound reach 0 before c (a stall) where r < 1.
+  const double c_mm = joint_mm - vg;
+  const double sigma_c =
+      vg <= len_a ? sigma0_[slot_a] + seg_sigma(slot_a, len_a - vg) : sigma_at(c_mm);
+  // Lattice form where it cannot stall before the cap takes over (see 3.): V ≥ A0, or V ≥ A0/2
+  // with mean r ≥ 1/2 over [c − V, c] (the bound is 0 at (V − V²/A0)/(2·r) ≤ V/2 before c).
+  bool lattice = vg >= a0_;
+  if (!lattice && vg >= 0.5 * a0_) lattice = sigma_c - sigma_at(c_mm - vg) >= 0.5 * vg;
+  // Kept in b's slot: the range reaches into b (and past it when b is short), and b stays in
+  // the buffer anyway while the tool is in it; in a's slot, a full small buffer could wait for
+  // a block that cannot arrive before a is retired.
+  insert(3 * slot_b + 2, Cap{joint_mm - vg, joint_mm + vg, vg, sigma_c, false, lattice});
 }
 
 void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const Segment& b) {
@@ -232,6 +290,8 @@ void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const
   const double around = std::min(vcap_[sa], vcap_[sb]);
   // The corner alone (no slow-corner stop rule: that belongs to the moving average).
   double vg = std::min(planner::joint_speed_pc(a, b, lim_, false), around);
+  // Lowered where the turn leaves too little of the axis budget for the speed change (7.).
+  if (zone_index_a_ == index_a) vg = std::min(vg, zone_vg_);
   const bool chained = prev_.valid && prev_.index_b == index_a;
   // A segment shorter than one step lets one cycle turn two corners at once (from the end of
   // the segment before a to the start of b; after another short one, three). Either the speed
@@ -251,8 +311,7 @@ void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const
         // The joint before a (at a's start) gets the same cap.
         const std::size_t sx = buf_.slot(prev_.index_a);
         if (buf_.begin_index() <= prev_.index_a) {
-          insert_joint_cap(sx, a.s0_mm, sigma0_[sa], ratio_[sx], buf_[prev_.index_a].length_mm,
-                           cap);
+          insert_joint_cap(sx, sa, a.s0_mm, buf_[prev_.index_a].length_mm, cap);
         }
         prev_.vg = cap;
       }
@@ -262,13 +321,11 @@ void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const
   const double vg_before = chained ? prev_.vg : kInf;
   prev_ = {true, index_a,   buf_.end_index() - 1, a.end_direction(), before,
            vg,   vg_before, a.length_mm < vg};
-  // A turn in the same cycle as a speed change: per axis the second difference is up to
-  // v·|S_i − E_i| + Δv·max(|S_i|, |E_i|). At a capped corner the turn uses the axis budget, so no
-  // acceleration happens while a joint cap is active (step()). Gentle joints without a cap are
-  // not covered (known: docs/lookahead.md).
+  // A turn in the same cycle as a speed change: the joint zones (7.) keep both within every
+  // axis limit. At a capped corner, in addition, the speed does not rise while the joint cap is
+  // active (step(): the path's direction change uses the whole Amax·τ there).
   if (!(vg < 0.999 * around)) return;  // the segments' own caps already hold there
-  insert_joint_cap(sa, a.end_mm(), sigma0_[sa] + ratio_[sa] * a.length_mm, ratio_[sa], a.length_mm,
-                   vg);
+  insert_joint_cap(sa, sb, a.end_mm(), a.length_mm, vg);
 }
 
 bool AccelLimitedAccDec::holds(std::uint64_t index) const {
@@ -379,7 +436,140 @@ double AccelLimitedAccDec::sigma_at(double pos_mm) const {
   const Segment& s = buf_[i];
   if (s.kind != ItemKind::kMotion) return sigma_total_;
   const std::size_t slot = buf_.slot(i);
-  return sigma0_[slot] + ratio_[slot] * std::clamp(pos_mm - s.s0_mm, 0.0, s.length_mm);
+  return sigma0_[slot] + seg_sigma(slot, pos_mm - s.s0_mm);
+}
+
+double AccelLimitedAccDec::seg_sigma(std::size_t slot, double x_mm) const {
+  const double len = len_mm_[slot];
+  const double r = ratio_[slot];
+  const double x = std::clamp(x_mm, 0.0, len);
+  if (head_mm_[slot] <= 0 && tail_mm_[slot] <= 0) return r * x;
+  // Pieces [0, h), [h, L − t), [L − t, L] (overlapping zones: the lower r of both).
+  const double h = std::min(head_mm_[slot], len);
+  const double t0 = std::max(0.0, len - tail_mm_[slot]);
+  const double pts[4] = {0, std::min(h, t0), std::max(h, t0), len};
+  double out = 0;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const double lo = pts[k], hi = std::min(pts[k + 1], x);
+    if (hi <= lo) continue;
+    const double mid = 0.5 * (pts[k] + pts[k + 1]);
+    double rate = r;
+    if (mid < h) rate = std::min(rate, head_r_[slot]);
+    if (mid > t0) rate = std::min(rate, tail_r_[slot]);
+    out += rate * (hi - lo);
+  }
+  return out;
+}
+
+double AccelLimitedAccDec::r_span(double from_mm, double to_mm, bool zones) const {
+  double out = 1;
+  if (buf_.empty()) return out;
+  for (std::uint64_t k = std::max(cur_, buf_.begin_index()); k < buf_.end_index(); ++k) {
+    const Segment& s = buf_[k];
+    if (s.kind != ItemKind::kMotion) continue;
+    if (s.s0_mm > to_mm) break;
+    if (s.end_mm() < from_mm) continue;
+    const std::size_t slot = buf_.slot(k);
+    double rate = ratio_[slot];
+    if (zones && std::max(from_mm, s.s0_mm) - s.s0_mm < head_mm_[slot]) {
+      rate = std::min(rate, head_r_[slot]);
+    }
+    if (zones && std::min(to_mm, s.end_mm()) - s.s0_mm > s.length_mm - tail_mm_[slot]) {
+      rate = std::min(rate, tail_r_[slot]);
+    }
+    out = std::min(out, rate);
+  }
+  return out;
+}
+
+void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, const Segment& b) {
+  const Segment& a = buf_[index_a];
+  const std::size_t sa = buf_.slot(index_a);
+  const AxisVec e = a.end_direction(), s = b.start_direction();
+  const double r_ab = std::min(ratio_[sa], ratio_[slot_b]);
+  const double around = std::min(vcap_[sa], vcap_[slot_b]);
+  const double v0 = std::min(around, planner::joint_speed_pc(a, b, lim_, false));
+  // Headroom per axis left by the turn at v0: u·|S_i − E_i| + Δu·min(|S_i|, |E_i|) ≤ a_i.
+  double d = r_ab * a0_;
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
+    const double m = std::min(std::abs(s[i]), std::abs(e[i]));
+    if (m > 1e-12) d = std::min(d, (lim_.axis_amax_pc2[i] - v0 * std::abs(s[i] - e[i])) / m);
+  }
+  double vj = v0;
+  const double floor = kZoneFloor * r_ab * a0_;
+  if (d < floor) {
+    // Too little left: the corner is passed slower instead, so that Δu ≤ floor fits.
+    d = floor;
+    for (std::size_t i = 0; i < kMaxAxes; ++i) {
+      if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
+      const double de = std::abs(s[i] - e[i]);
+      const double m = std::min(std::abs(s[i]), std::abs(e[i]));
+      if (de > 1e-12) vj = std::min(vj, (lim_.axis_amax_pc2[i] - d * m) / de);
+    }
+  }
+  zone_vg_ = vj;
+  zone_index_a_ = index_a;
+  const double rj = std::max(d / a0_, 1e-6);
+  if (rj >= r_ab) return;  // the segments' own r already fits
+  // Every step within V of the joint is ≤ V: the joint cap's Vg when there is one, else the
+  // segments' caps.
+  const double v = vj < 0.999 * around ? vj : around;
+  // The zone [j − 2V, j] may reach back over several short segments (at most kZoneWalk): each
+  // gets it as (part of) its tail zone. Never under or behind the tool (σ there is in use; a
+  // late joint, see 6.).
+  const double zone_start = std::max(a.end_mm() - 2 * v, pos_mm_);
+  std::uint64_t first = index_a + 1;
+  std::size_t walked = 0;
+  for (std::uint64_t k = index_a + 1;
+       k-- > std::max(cur_, buf_.begin_index()) && walked < kZoneWalk;) {
+    const Segment& x = buf_[k];
+    if (x.kind != ItemKind::kMotion) {
+      if (x.barrier) break;
+      continue;
+    }
+    if (x.end_mm() <= zone_start) break;
+    const std::size_t sx = buf_.slot(k);
+    const double covered = x.end_mm() - std::max(zone_start, x.s0_mm);
+    if (tail_mm_[sx] > 0)
+      tail_r_[sx] = std::min(tail_r_[sx], rj);
+    else
+      tail_r_[sx] = rj;
+    tail_mm_[sx] = std::max(tail_mm_[sx], covered);
+    first = k;
+    ++walked;
+  }
+  head_mm_[slot_b] = std::min(b.length_mm, v);
+  head_r_[slot_b] = rj;
+  if (first > index_a) return;
+  // σ after the first changed segment moved: the starts of the later ones, the end of the
+  // window, the cached σ of the stop, and the keys of the caps from there on (exact σ(c)).
+  for (std::uint64_t k = first; k < index_a; ++k) {
+    if (buf_[k].kind != ItemKind::kMotion) continue;
+    const std::size_t sk = buf_.slot(k);
+    double next = sigma0_[sk] + seg_sigma(sk, len_mm_[sk]);
+    for (std::uint64_t n = k + 1; n <= index_a; ++n) {
+      if (buf_[n].kind != ItemKind::kMotion) continue;
+      sigma0_[buf_.slot(n)] = next;
+      break;
+    }
+  }
+  sigma_total_ = sigma0_[sa] + seg_sigma(sa, a.length_mm);
+  cached_stop_mm_ = -1;
+  const double from_mm = buf_[first].s0_mm;
+  for (std::uint64_t k = first; k <= index_a; ++k) {
+    if (buf_[k].kind != ItemKind::kMotion) continue;
+    for (std::size_t c = 0; c < 3; ++c) {
+      const std::size_t cs = 3 * buf_.slot(k) + c;
+      if (state_[cs] != State::kApproaching || caps_[cs].c_mm < from_mm) continue;
+      Cap cap = caps_[cs];
+      cap.sigma_c = sigma_at(cap.c_mm);
+      if (c == 2 && cap.v < a0_) {
+        cap.lattice = cap.v >= 0.5 * a0_ && cap.sigma_c - sigma_at(cap.c_mm - cap.v) >= 0.5 * cap.v;
+      }
+      insert(cs, cap);
+    }
+  }
 }
 
 AccelLimitedAccDec::Bounds AccelLimitedAccDec::bound(double or_ratio, double sigma_p) const {
@@ -406,7 +596,7 @@ double AccelLimitedAccDec::reference_bound(double or_ratio) const {
       buf_[cur_].kind == ItemKind::kMotion) {
     const Segment& s = buf_[cur_];
     const std::size_t slot = buf_.slot(cur_);
-    sigma_p = sigma0_[slot] + ratio_[slot] * std::clamp(pos_mm_ - s.s0_mm, 0.0, s.length_mm);
+    sigma_p = sigma0_[slot] + seg_sigma(slot, pos_mm_ - s.s0_mm);
   }
   const std::size_t level =
       std::min(levels_ - 1, static_cast<std::size_t>(std::floor(or_ratio / level_step_ + 1e-9)));
@@ -438,22 +628,19 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   while (release_.min() <= pos_mm_) clear(release_.argmin());
 
   double sigma_p = sigma_total_;
-  double r = 1;
+  double r = 1, r_seg = 1;
   if (!buf_.empty() && cur_ < buf_.end_index() && buf_[cur_].kind == ItemKind::kMotion) {
     const Segment& s = buf_[cur_];
     const std::size_t slot = buf_.slot(cur_);
-    r = ratio_[slot];
-    sigma_p = sigma0_[slot] + r * std::clamp(pos_mm_ - s.s0_mm, 0.0, s.length_mm);
-    // A step that lands in the next segment: the lower of both accelerations.
-    if (pos_mm_ + step_ + r * a0_ >= s.end_mm()) {
-      for (std::uint64_t k = cur_ + 1; k < buf_.end_index(); ++k) {
-        if (buf_[k].kind != ItemKind::kMotion) continue;
-        r = std::min(r, ratio_[buf_.slot(k)]);
-        break;
-      }
-    }
+    sigma_p = sigma0_[slot] + seg_sigma(slot, pos_mm_ - s.s0_mm);
+    // The lowest r over where the next step can go (the next segment, joint zones: 7.).
+    r = r_span(pos_mm_, pos_mm_ + step_ + a0_, true);
+    r_seg = r_span(pos_mm_, pos_mm_ + step_ + a0_, false);
   }
+  // a: the speed change allowed in this cycle; a_seg, without the joint zones: the stop's
+  // lattice in real distance near the stop (the zones are in σ, which the stop bound uses).
   const double a = r * a0_;
+  const double a_seg = r_seg * a0_;
 
   const Bounds caps = bound(in.or_ratio, sigma_p);
   last_bound_ = std::min(caps.geo, caps.feed);
@@ -466,8 +653,8 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   const double to_stop = std::max(0.0, in.stop_mm - pos_mm_);
   const double d_sigma = std::max(0.0, cached_stop_sigma_ - sigma_p);
   double stop_limit = std::sqrt(a0_ * a0_ / 4 + 2 * a0_ * d_sigma) - a0_ / 2;
-  stop_limit = std::max(stop_limit, std::min(to_stop, a));
-  stop_limit = std::min(stop_limit, landing_step(to_stop, a));
+  stop_limit = std::max(stop_limit, std::min(to_stop, a_seg));
+  stop_limit = std::min(stop_limit, landing_step(to_stop, a_seg));
   // The last V_t = min(A0, a_i)/2 before a stop (the lowest corner cap, a reversal) is run at
   // ≤ V_t: a joint cap that arrives late at a stop's position (the window's tail) then finds
   // the steps around it already within its cap (see 6.).
@@ -476,7 +663,8 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     // stop; farther away the stop's own σ bound is the stricter one).
     const double vt = tail_cap_pc_;
     const double tail =
-        to_stop <= vt ? vt : std::sqrt(a * a + vt * vt + 2 * a * (to_stop - vt)) - a;
+        to_stop <= vt ? vt
+                      : std::sqrt(a_seg * a_seg + vt * vt + 2 * a_seg * (to_stop - vt)) - a_seg;
     stop_limit = std::min(stop_limit, tail);
   }
 
@@ -484,10 +672,16 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   // Around a corner (a joint cap active) the speed does not rise, except from a near stop up
   // to V_t (a stop right at a corner: the first steps are then ≤ V_t, within every axis limit).
   if (active_joints_ > 0) u = std::min(u, std::max(step_, tail_cap_pc_));
-  // Geometric caps and stops are hard limits; the feed limit may drop by more than one step's
-  // deceleration only when the override is lowered: then decelerate at A_seg.
-  u = std::min({u, std::max(step_ - a, caps.feed), caps.geo, stop_limit, to_stop});
+  // Geometric caps and stops are hard limits, and so is the feed limit while the override has
+  // not been lowered (following its bound needs no more than the deceleration of the zone just
+  // run, 3. (ii) and 7.). After an override decrease the feed limit may drop by more than one
+  // step's deceleration: then decelerate at a until the tool is within it again.
+  if (in.or_ratio < prev_or_) feed_recover_ = true;
+  prev_or_ = in.or_ratio;
+  const double feed = feed_recover_ ? std::max(step_ - a, caps.feed) : caps.feed;
+  u = std::min({u, feed, caps.geo, stop_limit, to_stop});
   u = std::max(0.0, u);
+  if (u <= caps.feed) feed_recover_ = false;
   if (u > 0 && u >= to_stop) {
     pos_mm_ = in.stop_mm;  // land exactly on the stop
   } else {

@@ -54,13 +54,20 @@ class AccelLimitedAccDec final : public AccDec {
   enum class State : std::uint8_t { kEmpty, kApproaching, kActive };
 
   void insert(std::size_t slot, const Cap& cap);
-  void insert_joint_cap(std::size_t slot_a, double joint_mm, double sigma_joint, double ratio_a,
-                        double len_a, double vg);
+  void insert_joint_cap(std::size_t slot_a, std::size_t slot_b, double joint_mm, double len_a,
+                        double vg);
   void activate(std::size_t slot);
   void clear_keys(std::size_t slot);
   static double entry_mm(const Cap& cap);
   void clear(std::size_t slot);
   double sigma_at(double pos_mm) const;  // σ of a path position inside the buffer
+  // ∫ r over the first x mm of the segment in `slot` (head and tail zones included).
+  double seg_sigma(std::size_t slot, double x_mm) const;
+  // The lowest r over path positions [from, to] (the current segment and the following ones),
+  // with or without the joint zones.
+  double r_span(double from_mm, double to_mm, bool zones) const;
+  // A joint a → b without a stop between: the acceleration zones on both sides (see 7.).
+  void joint_zones(std::uint64_t index_a, std::size_t slot_b, const planner::Segment& b);
   void advance_current();
   struct Bounds {
     double geo, feed;
@@ -77,9 +84,17 @@ class AccelLimitedAccDec final : public AccDec {
 
   // Per buffer slot: σ at the segment start, acceleration ratio r = A_seg/A0, speed cap.
   std::vector<double> sigma0_, ratio_, vcap_;
+  // Per buffer slot: the joint zones (see 7.): r ≤ head_r_ on the first head_mm_, ≤ tail_r_ on
+  // the last tail_mm_ of the segment.
+  std::vector<double> len_mm_, head_mm_, head_r_, tail_mm_, tail_r_;
+  // Passing speed the joint zones of the joint after item zone_index_a_ were computed for (a
+  // joint cap when lower than the segments' caps; see 7.).
+  double zone_vg_ = 0;
+  std::uint64_t zone_index_a_ = ~std::uint64_t{0};
   double sigma_total_ = 0;
 
-  // Caps: three slots per buffer slot (range cap of the segment's speed, of its feed, joint cap).
+  // Caps: three slots per buffer slot (range cap of the segment's speed, of its feed, the cap of
+  // the joint at its start).
   std::vector<Cap> caps_;
   std::vector<State> state_;
   planner::MinTree entry_, key_geo_, key_lattice_, active_geo_, active_feed_, release_;
@@ -105,6 +120,8 @@ class AccelLimitedAccDec final : public AccDec {
   std::uint64_t cur_ = 0;          // buffer item under the tool
   double pos_mm_ = 0, step_ = 0, last_bound_ = 0;
   double cached_stop_mm_ = -1, cached_stop_sigma_ = 0;
+  double prev_or_ = 0;         // the override of the last cycle
+  bool feed_recover_ = false;  // lowered override: above the feed limit, decelerating to it
   bool check_ = false;
   std::uint64_t mismatches_ = 0;
 };
