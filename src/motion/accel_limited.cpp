@@ -489,24 +489,34 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   const double r_ab = std::min(ratio_[sa], ratio_[slot_b]);
   const double around = std::min(vcap_[sa], vcap_[slot_b]);
   const double v0 = std::min(around, planner::joint_speed_pc(a, b, lim_, false));
-  // Headroom per axis left by the turn at v0: u·|S_i − E_i| + Δu·min(|S_i|, |E_i|) ≤ a_i.
-  double d = r_ab * a0_;
-  for (std::size_t i = 0; i < kMaxAxes; ++i) {
-    if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
-    const double m = std::min(std::abs(s[i]), std::abs(e[i]));
-    if (m > 1e-12) d = std::min(d, (lim_.axis_amax_pc2[i] - v0 * std::abs(s[i] - e[i])) / m);
-  }
+  // Headroom per axis left by the turn at v0 (7.): with both steps ≤ V and |u2 − u1| ≤ D the
+  // worst second differences are V·(S_i − E_i) − D·S_i and V·(S_i − E_i) + D·E_i.
+  auto d_max = [&](double v) {
+    double d = r_ab * a0_;
+    for (std::size_t i = 0; i < kMaxAxes; ++i) {
+      if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
+      const double ai = lim_.axis_amax_pc2[i], t = v * (s[i] - e[i]);
+      if (std::abs(s[i]) > 1e-12) d = std::min(d, (ai + (s[i] > 0 ? t : -t)) / std::abs(s[i]));
+      if (std::abs(e[i]) > 1e-12) d = std::min(d, (ai - (e[i] > 0 ? t : -t)) / std::abs(e[i]));
+    }
+    return std::max(0.0, d);
+  };
+  double d = d_max(v0);
   double vj = v0;
   const double floor = kZoneFloor * r_ab * a0_;
   if (d < floor) {
-    // Too little left: the corner is passed slower instead, so that Δu ≤ floor fits.
+    // Too little left: the corner is passed slower instead, so that Δu ≤ floor fits:
+    // |V·Δ_i − F·S_i| ≤ a_i and |V·Δ_i + F·E_i| ≤ a_i (Δ = S − E, F = floor; true at V = 0).
     d = floor;
     for (std::size_t i = 0; i < kMaxAxes; ++i) {
       if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
-      const double de = std::abs(s[i] - e[i]);
-      const double m = std::min(std::abs(s[i]), std::abs(e[i]));
-      if (de > 1e-12) vj = std::min(vj, (lim_.axis_amax_pc2[i] - d * m) / de);
+      const double delta = s[i] - e[i];
+      if (std::abs(delta) <= 1e-12) continue;
+      const double sg = delta > 0 ? 1.0 : -1.0, ai = lim_.axis_amax_pc2[i];
+      vj = std::min(vj, (ai + d * s[i] * sg) / std::abs(delta));
+      vj = std::min(vj, (ai - d * e[i] * sg) / std::abs(delta));
     }
+    vj = std::max(vj, 0.0);
   }
   zone_vg_ = vj;
   zone_index_a_ = index_a;
