@@ -90,17 +90,21 @@
 //    with one corner at j (unit tangents E before, S after), steps u1 = s_k − s_{k−1} and
 //    u2 = s_{k+1} − s_k with j in [s_{k−1}, s_{k+1}]: with α the part of step 1 after j and β the
 //    part of step 2 before j,  P[k+1] − 2P[k] + P[k−1] = (u2 − u1)·S + c·(S − E), c = u1 − α − β,
-//    c ∈ [min(0, u1 − u2), u1] (= (u2 − u1)·E + c'·(S − E) with c' ∈ [0, max(u1, u2)]). So per
-//    axis, with u1, u2 ≤ V and |u2 − u1| ≤ D:
-//        |Δ²P_i| ≤ V·|S_i − E_i| + D·min(|S_i|, |E_i|) ≤ a_i.
-//    The corner limit alone uses the whole budget for the turn (V·|S_i − E_i| ≤ a_i), and the
-//    segments' r alone the whole budget for the speed change (D·|E_i| ≤ a_i): on a diagonal path
-//    with axis limits = Amax both land on the same axis (measured up to 1.38 × the limit at
-//    gentle corners). So every joint without a stop gets a *zone* in which r is lowered to
-//        r_j = min(r_a, r_b, min_i (a_i − V0·|S_i − E_i|) / (A0·min(|S_i|, |E_i|))),
-//    V0 = the corner's passing speed (or the segments' caps where the corner allows more). When
-//    r_j would fall below kZoneFloor·min(r_a, r_b), D = that floor and the corner is passed
-//    slower instead, V_j = min_i (a_i − D·min(|S_i|, |E_i|)) / |S_i − E_i| (a joint cap).
+//    c ∈ [min(0, u1 − u2), u1]. Linear in c: the extremes are c = u1 (a sample on the joint:
+//    u2·S − u1·E) and c = min(0, u1 − u2) ((u2 − u1)·S or (u2 − u1)·E: a plain speed change,
+//    within the segments' r). |u2·S_i − u1·E_i| is convex in (u1, u2), so over u1, u2 ≤ V,
+//    |u2 − u1| ≤ D its maximum is at a vertex: (V, V), (V, V − D), (V − D, V), (D, 0), (0, D):
+//        |V·(S_i − E_i)| ≤ a_i (the corner limit), D·|S_i|, D·|E_i| ≤ a_i (the segments' r), and
+//        |V·(S_i − E_i) − D·S_i| ≤ a_i,   |V·(S_i − E_i) + D·E_i| ≤ a_i.
+//    The corner limit alone uses the whole budget for the turn, the segments' r alone the whole
+//    budget for the speed change: on a diagonal path with axis limits = Amax the last two add
+//    both on one axis (measured up to 1.38 × the limit at gentle corners). At a reversal
+//    (S = −E) or a right angle along the axes they need nothing more. So every joint without a
+//    stop gets a *zone* in which r is lowered to r_j = D/A0, D the largest value meeting the
+//    last two with V = V0, the corner's passing speed (or the segments' caps where the corner
+//    allows more); a smaller V keeps them (convex in V, and true at V = 0). When D would fall
+//    below kZoneFloor·min(r_a, r_b)·A0, D = that floor and the corner is passed slower instead
+//    (the largest V meeting both, a joint cap).
 //    The zone covers [j − 2V, j + V] (V: the largest step near the joint, V_j or the segments'
 //    caps): the speed change u2 − u1 of a pair around j is
 //      - for an increase, ≤ A0 × the lowest r over where step 2 can go (step()), and step 2
