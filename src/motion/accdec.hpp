@@ -30,6 +30,11 @@ class AccDec {
                         const planner::Segment& b) = 0;
   // Whether the acc/dec still needs buffer item `index` (the interpolator has passed it).
   virtual bool holds(std::uint64_t index) const = 0;
+  // The buffer is full and its oldest item `index` is still held: keep what the acc/dec needs
+  // of it elsewhere (possibly stricter) so that it can be dropped; false when it cannot. Without
+  // this a full buffer whose oldest item is held deadlocks: no new block, so the tool waits at
+  // the window's end, so the item is never passed.
+  virtual bool detach(std::uint64_t /*index*/) { return false; }
   // The buffer drops item `index`.
   virtual void on_retire(std::uint64_t index) = 0;
 

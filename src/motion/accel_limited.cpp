@@ -177,14 +177,15 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       head_r_(buffer.capacity(), 1.0),
       tail_mm_(buffer.capacity(), 0.0),
       tail_r_(buffer.capacity(), 1.0),
-      caps_(3 * buffer.capacity()),
-      state_(3 * buffer.capacity(), State::kEmpty),
-      entry_(3 * buffer.capacity()),
-      key_geo_(3 * buffer.capacity()),
-      key_lattice_(3 * buffer.capacity()),
-      active_geo_(3 * buffer.capacity()),
-      active_feed_(3 * buffer.capacity()),
-      release_(3 * buffer.capacity()),
+      caps_(3 * buffer.capacity() + 3),
+      state_(3 * buffer.capacity() + 3, State::kEmpty),
+      entry_(3 * buffer.capacity() + 3),
+      key_geo_(3 * buffer.capacity() + 3),
+      key_lattice_(3 * buffer.capacity() + 3),
+      active_geo_(3 * buffer.capacity() + 3),
+      active_feed_(3 * buffer.capacity() + 3),
+      release_(3 * buffer.capacity() + 3),
+      overflow_(3 * buffer.capacity()),
       check_(check_reference_walk) {
   tail_cap_pc_ = a0_;
   for (std::size_t i = 0; i < kMaxAxes; ++i) {
@@ -194,7 +195,7 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
   }
   tail_cap_pc_ *= 0.5;
   key_feed_.reserve(levels_);
-  for (std::size_t j = 0; j < levels_; ++j) key_feed_.emplace_back(3 * buffer.capacity());
+  for (std::size_t j = 0; j < levels_; ++j) key_feed_.emplace_back(3 * buffer.capacity() + 3);
 }
 
 double AccelLimitedAccDec::segment_accel_pc2(std::uint64_t index) const {
@@ -343,6 +344,34 @@ void AccelLimitedAccDec::on_retire(std::uint64_t index) {
   clear(s);
   clear(s + 1);
   clear(s + 2);
+}
+
+bool AccelLimitedAccDec::detach(std::uint64_t index) {
+  // The caps of a segment the tool has passed are active ones (their range started behind the
+  // tool) whose range reaches past it: a joint cap [j − Vg, j + Vg) over segments shorter than
+  // Vg. Merged into the overflow slot of their kind (3·capacity + k, so that slot % 3 still
+  // tells a joint cap) as min V over [.., max e): stricter than each, so every cap still holds.
+  const std::size_t s = 3 * buf_.slot(index);
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (state_[s + k] == State::kApproaching) return false;
+  }
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (state_[s + k] != State::kActive) continue;
+    const Cap cap = caps_[s + k];
+    clear(s + k);
+    const std::size_t o = overflow_ + k;
+    if (state_[o] == State::kActive) {
+      Cap merged = caps_[o];
+      merged.v = std::min(merged.v, cap.v);
+      merged.e_mm = std::max(merged.e_mm, cap.e_mm);
+      clear(o);
+      caps_[o] = merged;
+    } else {
+      caps_[o] = cap;
+    }
+    activate(o);
+  }
+  return true;
 }
 
 void AccelLimitedAccDec::insert(std::size_t slot, const Cap& cap) {

@@ -27,6 +27,7 @@ class AccelLimitedAccDec final : public AccDec {
                 const planner::Segment& b) override;
   bool holds(std::uint64_t index) const override;
   void on_retire(std::uint64_t index) override;
+  bool detach(std::uint64_t index) override;
   void step(const CycleInput& in) override;
 
   double tool_mm() const override { return pos_mm_; }
@@ -99,6 +100,8 @@ class AccelLimitedAccDec final : public AccDec {
   std::vector<State> state_;
   planner::MinTree entry_, key_geo_, key_lattice_, active_geo_, active_feed_, release_;
   std::vector<planner::MinTree> key_feed_;  // one per override level
+  // Slots 3·capacity + k (k = 0, 1, 2): active caps of retired segments, merged (detach()).
+  std::size_t overflow_;
 
   // Range caps of the previous segment (to extend them instead of adding a cap per segment).
   bool have_prev_ = false;

@@ -251,7 +251,10 @@ struct Kernel::Impl {
   void retire() {
     while (buf.begin_index() < out_idx) {
       const std::uint64_t i = buf.begin_index();
-      if (buf[i].kind == ItemKind::kMotion && acc.holds(i)) break;
+      if (buf[i].kind == ItemKind::kMotion && acc.holds(i) &&
+          (buf.size() + 3 <= buf.capacity() || !acc.detach(i))) {
+        break;
+      }
       acc.on_retire(i);
       buf.pop_front();
     }

@@ -217,6 +217,30 @@ TEST(AccelLimited, ZigZagHelicesAndLateBlocks) {
   run_checked(small, seed_example());
 }
 
+// Segments shorter than a corner's passing speed: a joint cap [j − Vg, j + Vg) reaches over
+// several segments, so the oldest segment in the buffer is still needed after the tool has
+// passed it. With a small buffer and blocks arriving late the buffer is full of such segments
+// and the tool waits at the window's end for the next block: the kernel must still accept it
+// (found by RandomProgramsWithOverrideSteps, seed 16775138560219754814: the tool waited 2000 s
+// 0.9 µm before the end).
+TEST(AccelLimited, FullSmallBufferOfSegmentsShorterThanTheirCornerCapsDoesNotWait) {
+  MachineConfig m = test_machine();
+  m.lookahead_blocks = 5;
+  Prog p;
+  for (int i = 0; i < 60; ++i) {
+    const double a = (i % 2 == 0 ? 40.0 : -40.0) * std::numbers::pi / 180;
+    const double len = 0.0002 + 0.0001 * (i % 3);
+    p.line_to(p.pos.xyz() + Vec3{len * std::cos(a), len * std::sin(a), 0}, 8000);
+  }
+  for (std::size_t every : {1u, 2u}) {
+    RunOpts o = accel_opts();
+    o.feed_every = every;
+    o.max_cycles = 100000;  // the path is 21 µm long: it takes a few hundred cycles
+    const RunResult r = run_checked(m, p, o);
+    EXPECT_LT(r.samples.size(), 2000u) << "feed_every " << every;
+  }
+}
+
 TEST(AccelLimited, RapidsReachTheRapidRateAndEventsHappenInOrder) {
   const MachineConfig m = test_machine();
   Prog p;
