@@ -8,6 +8,7 @@
 #include <numbers>
 #include <string_view>
 
+#include "io/buckets.hpp"
 #include "io/report_page.hpp"
 
 namespace cncore::io {
@@ -177,25 +178,7 @@ void ReportObserver::add_to_bucket(const ReportBucket& s) {
     if (!std::isnan(b.load_max_pct)) merge_max(a.load_max_pct, b.load_max_pct);
     if (!std::isnan(b.load_target_pct)) a.load_target_pct = b.load_target_pct;
   };
-  if (!buckets_.empty() && buckets_.back().samples < bucket_samples_) {
-    merge(buckets_.back(), s);
-    return;
-  }
-  if (buckets_.size() == 2 * options_.buckets) {
-    // Full: merge neighbours in place; every bucket now spans twice the samples.
-    for (std::size_t i = 0; i < options_.buckets; ++i) {
-      ReportBucket a = buckets_[2 * i];
-      merge(a, buckets_[2 * i + 1]);
-      buckets_[i] = a;
-    }
-    buckets_.resize(options_.buckets);
-    bucket_samples_ *= 2;
-    if (buckets_.back().samples < bucket_samples_) {
-      merge(buckets_.back(), s);
-      return;
-    }
-  }
-  buckets_.push_back(s);
+  add_to_buckets(buckets_, bucket_samples_, options_.buckets, s, merge);
 }
 
 void ReportObserver::add_path_point(const ReportPathPoint& p) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "io/buckets.hpp"
 #include "io/report_page.hpp"
 
 namespace cncore::io {
@@ -78,25 +79,7 @@ void TableReportObserver::add_to_bucket(const TableReportBucket& s) {
     a.ref.merge(b.ref);
     a.m_codes += b.m_codes;
   };
-  if (!buckets_.empty() && buckets_.back().samples < bucket_samples_) {
-    merge(buckets_.back(), s);
-    return;
-  }
-  if (buckets_.size() == 2 * options_.buckets) {
-    // Full: merge neighbours in place; every bucket now spans twice the samples.
-    for (std::size_t i = 0; i < options_.buckets; ++i) {
-      TableReportBucket a = buckets_[2 * i];
-      merge(a, buckets_[2 * i + 1]);
-      buckets_[i] = a;
-    }
-    buckets_.resize(options_.buckets);
-    bucket_samples_ *= 2;
-    if (buckets_.back().samples < bucket_samples_) {
-      merge(buckets_.back(), s);
-      return;
-    }
-  }
-  buckets_.push_back(s);
+  add_to_buckets(buckets_, bucket_samples_, options_.buckets, s, merge);
 }
 
 std::size_t TableReportObserver::memory_bytes() const {
