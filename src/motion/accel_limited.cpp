@@ -168,7 +168,9 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       a0_(limits.amax_pc2),
       or_max_(std::max(1.0, or_max)),
       level_step_(or_max_ <= 4.0 ? 0.1 : or_max_ / 40.0),
-      levels_(static_cast<std::size_t>(std::floor(or_max_ / level_step_ + 1e-9)) + 1),
+      // 41 levels: 0 … 400 % by 10 %, or 40 equal steps up to a higher ORmax.
+      levels_(std::min(kMaxLevels,
+                       static_cast<std::size_t>(std::floor(or_max_ / level_step_ + 1e-9)) + 1)),
       sigma0_(buffer.capacity(), 0.0),
       ratio_(buffer.capacity(), 1.0),
       vcap_(buffer.capacity(), 0.0),
@@ -177,16 +179,30 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       head_r_(buffer.capacity(), 1.0),
       tail_mm_(buffer.capacity(), 0.0),
       tail_r_(buffer.capacity(), 1.0),
-      caps_(3 * buffer.capacity() + 3),
-      state_(3 * buffer.capacity() + 3, State::kEmpty),
-      entry_(3 * buffer.capacity() + 3),
-      key_geo_(3 * buffer.capacity() + 3),
-      key_lattice_(3 * buffer.capacity() + 3),
-      active_geo_(3 * buffer.capacity() + 3),
-      active_feed_(3 * buffer.capacity() + 3),
-      release_(3 * buffer.capacity() + 3),
+      pool_(buffer.capacity() + 1),
+      caps_(3 * pool_),
+      state_(3 * pool_, State::kEmpty),
+      owner_(3 * buffer.capacity() + 3, kNone),
+      where_(3 * pool_, kNone),
+      free_(3 * pool_),
+      entry_(3 * pool_),
+      key_geo_(3 * pool_),
+      key_lattice_(3 * pool_),
+      active_geo_(3 * pool_),
+      active_feed_(3 * pool_),
+      release_(3 * pool_),
+      key_feed_(pool_, levels_),
       overflow_(3 * buffer.capacity()),
+      r_zone_(buffer.capacity()),
+      r_plain_(buffer.capacity()),
       check_(check_reference_walk) {
+  // Free ids, lowest on top.
+  for (std::size_t k = 0; k < 3; ++k) {
+    for (std::size_t i = 0; i < pool_; ++i) {
+      free_[k * pool_ + i] = static_cast<std::uint32_t>(k * pool_ + pool_ - 1 - i);
+    }
+    free_n_[k] = pool_;
+  }
   tail_cap_pc_ = a0_;
   for (std::size_t i = 0; i < kMaxAxes; ++i) {
     if (lim_.axis_on[i] && lim_.axis_amax_pc2[i] > 0) {
@@ -194,8 +210,6 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
     }
   }
   tail_cap_pc_ *= 0.5;
-  key_feed_.reserve(levels_);
-  for (std::size_t j = 0; j < levels_; ++j) key_feed_.emplace_back(3 * buffer.capacity() + 3);
 }
 
 double AccelLimitedAccDec::segment_accel_pc2(std::uint64_t index) const {
@@ -245,6 +259,7 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
                buf_[prev_index_].kind == ItemKind::kMotion;
   for (std::uint64_t k = prev_index_ + 1; joint && k < index; ++k) joint = !buf_[k].barrier;
   if (joint) joint_zones(prev_index_, slot, s);
+  update_r(index);
   sigma0_[slot] = sigma_total_;
   sigma_total_ += seg_sigma(slot, s.length_mm);
   const Cap caps[2] = {{s.s0_mm, s.end_mm(), vcap, sigma0_[slot], false, vcap >= a0_},
@@ -253,15 +268,18 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
     const std::size_t to = 3 * slot + k;
     if (contiguous) {
       const std::size_t from = 3 * buf_.slot(prev_index_) + k;
-      if (state_[from] != State::kEmpty && caps_[from].v == caps[k].v) {
+      if (owner_[from] != kNone && caps_[owner_[from]].v == caps[k].v) {
         // Same limit as the previous segment: extend its cap (moved to this slot so that the
-        // buffer can retire the earlier segments).
-        Cap moved = caps_[from];
-        const bool active = state_[from] == State::kActive;
-        moved.e_mm = s.end_mm();
-        clear(from);
-        insert(to, moved);
-        if (active && state_[to] != State::kActive) activate(to);
+        // buffer can retire the earlier segments; its keys and entry do not change).
+        clear(to);
+        move(from, to);
+        const std::size_t g = owner_[to];
+        caps_[g].e_mm = s.end_mm();
+        if (state_[g] == State::kActive) {
+          release_.set(g, caps_[g].e_mm);
+        } else if (pos_mm_ >= entry_mm(caps_[g])) {
+          activate(g);
+        }
         continue;
       }
     }
@@ -294,7 +312,10 @@ void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const
   const std::size_t sb = buf_.slot(buf_.end_index() - 1);
   const double around = std::min(vcap_[sa], vcap_[sb]);
   // The corner alone (no slow-corner stop rule: that belongs to the moving average).
-  double vg = std::min(planner::joint_speed_pc(a, b, lim_, false), around);
+  // (joint_zones() computed the corner's speed for this same joint when b arrived.)
+  const double corner =
+      zone_index_a_ == index_a ? zone_joint_pc_ : planner::joint_speed_pc(a, b, lim_, false);
+  double vg = std::min(corner, around);
   // Lowered where the turn leaves too little of the axis budget for the speed change (7.).
   if (zone_index_a_ == index_a) vg = std::min(vg, zone_vg_);
   const bool chained = prev_.valid && prev_.index_b == index_a;
@@ -335,15 +356,18 @@ void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const
 
 bool AccelLimitedAccDec::holds(std::uint64_t index) const {
   const std::size_t s = 3 * buf_.slot(index);
-  return state_[s] != State::kEmpty || state_[s + 1] != State::kEmpty ||
-         state_[s + 2] != State::kEmpty;
+  return owner_[s] != kNone || owner_[s + 1] != kNone || owner_[s + 2] != kNone;
 }
 
 void AccelLimitedAccDec::on_retire(std::uint64_t index) {
-  const std::size_t s = 3 * buf_.slot(index);
+  const std::size_t slot = buf_.slot(index);
+  const std::size_t s = 3 * slot;
   clear(s);
   clear(s + 1);
   clear(s + 2);
+  // The slot may next hold an event (no on_segment): no r there.
+  r_zone_.set(slot, MinTree::kEmpty);
+  r_plain_.set(slot, MinTree::kEmpty);
 }
 
 bool AccelLimitedAccDec::detach(std::uint64_t index) {
@@ -353,49 +377,66 @@ bool AccelLimitedAccDec::detach(std::uint64_t index) {
   // tells a joint cap) as min V over [.., max e): stricter than each, so every cap still holds.
   const std::size_t s = 3 * buf_.slot(index);
   for (std::size_t k = 0; k < 3; ++k) {
-    if (state_[s + k] == State::kApproaching) return false;
+    if (pos_state(s + k) == State::kApproaching) return false;
   }
   for (std::size_t k = 0; k < 3; ++k) {
-    if (state_[s + k] != State::kActive) continue;
-    const Cap cap = caps_[s + k];
-    clear(s + k);
+    if (pos_state(s + k) != State::kActive) continue;
     const std::size_t o = overflow_ + k;
-    if (state_[o] == State::kActive) {
-      Cap merged = caps_[o];
+    if (pos_state(o) == State::kActive) {
+      const Cap cap = caps_[owner_[s + k]];
+      clear(s + k);
+      const std::size_t g = owner_[o];
+      Cap& merged = caps_[g];
       merged.v = std::min(merged.v, cap.v);
       merged.e_mm = std::max(merged.e_mm, cap.e_mm);
-      clear(o);
-      caps_[o] = merged;
+      (merged.feed ? active_feed_ : active_geo_).set(g, merged.v);
+      release_.set(g, merged.e_mm);
     } else {
-      caps_[o] = cap;
+      move(s + k, o);  // active, its trees unchanged
     }
-    activate(o);
   }
   return true;
 }
 
-void AccelLimitedAccDec::insert(std::size_t slot, const Cap& cap) {
-  clear(slot);
-  caps_[slot] = cap;
-  const double entry = entry_mm(cap);
-  if (pos_mm_ >= entry) {
-    activate(slot);
+void AccelLimitedAccDec::insert(std::size_t pos, const Cap& cap) {
+  clear(pos);
+  const std::size_t kind = pos % 3;
+  const std::size_t g = free_[kind * pool_ + --free_n_[kind]];
+  owner_[pos] = static_cast<std::uint32_t>(g);
+  where_[g] = static_cast<std::uint32_t>(pos);
+  caps_[g] = cap;
+  if (pos_mm_ >= entry_mm(cap)) {
+    activate(g);
     return;
   }
-  state_[slot] = State::kApproaching;
-  entry_.set(slot, entry);
+  state_[g] = State::kApproaching;
+  set_keys(g);
+}
+
+void AccelLimitedAccDec::set_keys(std::size_t g) {
+  const Cap& cap = caps_[g];
+  entry_.set(g, entry_mm(cap));
   const double k_sigma = 2 * a0_ * cap.sigma_c;
   if (cap.lattice) {
     const double h = cap.v - 0.5 * a0_;
-    key_lattice_.set(slot, h * h + k_sigma);
+    key_lattice_.set(g, h * h + k_sigma);
   } else if (cap.feed) {
+    std::array<double, kMaxLevels> keys;
     for (std::size_t j = 0; j < levels_; ++j) {
       const double v = static_cast<double>(j) * level_step_ * cap.v;
-      key_feed_[j].set(slot, v * v + k_sigma);
+      keys[j] = v * v + k_sigma;
     }
+    key_feed_.set(g - pool_, keys.data());
   } else {
-    key_geo_.set(slot, cap.v * cap.v + k_sigma);
+    key_geo_.set(g, cap.v * cap.v + k_sigma);
   }
+}
+
+void AccelLimitedAccDec::move(std::size_t from, std::size_t to) {
+  const std::uint32_t g = owner_[from];
+  owner_[to] = g;
+  owner_[from] = kNone;
+  where_[g] = static_cast<std::uint32_t>(to);
 }
 
 double AccelLimitedAccDec::entry_mm(const Cap& cap) {
@@ -405,45 +446,70 @@ double AccelLimitedAccDec::entry_mm(const Cap& cap) {
   return cap.lattice ? cap.c_mm - cap.v : cap.c_mm;
 }
 
-void AccelLimitedAccDec::clear_keys(std::size_t slot) {
-  const Cap& cap = caps_[slot];
-  entry_.set(slot, MinTree::kEmpty);
+void AccelLimitedAccDec::clear_keys(std::size_t g) {
+  const Cap& cap = caps_[g];
+  entry_.set(g, MinTree::kEmpty);
   if (cap.lattice) {
-    key_lattice_.set(slot, MinTree::kEmpty);
+    key_lattice_.set(g, MinTree::kEmpty);
   } else if (cap.feed) {
-    for (auto& t : key_feed_) t.set(slot, MinTree::kEmpty);
+    key_feed_.clear(g - pool_);
   } else {
-    key_geo_.set(slot, MinTree::kEmpty);
+    key_geo_.set(g, MinTree::kEmpty);
   }
 }
 
-void AccelLimitedAccDec::activate(std::size_t slot) {
-  const Cap& cap = caps_[slot];
-  if (state_[slot] == State::kApproaching) {
-    clear_keys(slot);
+void AccelLimitedAccDec::activate(std::size_t g) {
+  const Cap& cap = caps_[g];
+  if (state_[g] == State::kApproaching) {
+    clear_keys(g);
   }
-  state_[slot] = State::kActive;
-  if (slot % 3 == 2) ++active_joints_;
-  (cap.feed ? active_feed_ : active_geo_).set(slot, cap.v);
-  release_.set(slot, cap.e_mm);
+  state_[g] = State::kActive;
+  if (g >= 2 * pool_) ++active_joints_;
+  (cap.feed ? active_feed_ : active_geo_).set(g, cap.v);
+  release_.set(g, cap.e_mm);
 }
 
-void AccelLimitedAccDec::clear(std::size_t slot) {
-  if (state_[slot] == State::kEmpty) return;
-  const bool feed = caps_[slot].feed;
-  if (state_[slot] == State::kApproaching) {
-    clear_keys(slot);
+void AccelLimitedAccDec::clear(std::size_t pos) {
+  const std::size_t g = owner_[pos];
+  if (g == kNone) return;
+  const bool feed = caps_[g].feed;
+  if (state_[g] == State::kApproaching) {
+    clear_keys(g);
   } else {
-    (feed ? active_feed_ : active_geo_).set(slot, MinTree::kEmpty);
-    release_.set(slot, MinTree::kEmpty);
-    if (slot % 3 == 2) --active_joints_;
+    (feed ? active_feed_ : active_geo_).set(g, MinTree::kEmpty);
+    release_.set(g, MinTree::kEmpty);
+    if (g >= 2 * pool_) --active_joints_;
   }
-  state_[slot] = State::kEmpty;
+  state_[g] = State::kEmpty;
+  owner_[pos] = kNone;
+  where_[g] = kNone;
+  const std::size_t kind = g / pool_;
+  free_[kind * pool_ + free_n_[kind]++] = static_cast<std::uint32_t>(g);
+}
+
+void AccelLimitedAccDec::update_r(std::uint64_t index) {
+  const Segment& s = buf_[index];
+  const std::size_t slot = buf_.slot(index);
+  if (s.kind != ItemKind::kMotion) {
+    r_zone_.set(slot, MinTree::kEmpty);
+    r_plain_.set(slot, MinTree::kEmpty);
+    return;
+  }
+  // r_span()'s rate of a segment inside [from, to] as a whole (from ≤ s0, end ≤ to), written
+  // as there so that the minimum is the same bit for bit.
+  double rate = ratio_[slot];
+  if (0.0 < head_mm_[slot]) rate = std::min(rate, head_r_[slot]);
+  if (s.end_mm() - s.s0_mm > s.length_mm - tail_mm_[slot]) rate = std::min(rate, tail_r_[slot]);
+  r_zone_.set(slot, rate);
+  r_plain_.set(slot, ratio_[slot]);
 }
 
 void AccelLimitedAccDec::advance_current() {
   if (buf_.empty()) return;
   cur_ = std::max(cur_, buf_.begin_index());
+  // Skip the segments the tool has passed by a galloping search over the buffer's end
+  // positions (many tiny segments per cycle); the walk below then only steps over events.
+  if (cur_ + 1 < buf_.end_index()) cur_ = buf_.seek(cur_, pos_mm_);
   while (cur_ + 1 < buf_.end_index() &&
          (buf_[cur_].kind != ItemKind::kMotion || pos_mm_ >= buf_[cur_].end_mm())) {
     ++cur_;
@@ -497,11 +563,14 @@ double AccelLimitedAccDec::seg_sigma(std::size_t slot, double x_mm) const {
 double AccelLimitedAccDec::r_span(double from_mm, double to_mm, bool zones) const {
   double out = 1;
   if (buf_.empty()) return out;
-  for (std::uint64_t k = std::max(cur_, buf_.begin_index()); k < buf_.end_index(); ++k) {
+  const std::uint64_t first = std::max(cur_, buf_.begin_index()), end = buf_.end_index();
+  if (first >= end) return out;
+  // One item of the walk "motion items from `first` while s0 ≤ to"; false: stop.
+  auto item = [&](std::uint64_t k) {
     const Segment& s = buf_[k];
-    if (s.kind != ItemKind::kMotion) continue;
-    if (s.s0_mm > to_mm) break;
-    if (s.end_mm() < from_mm) continue;
+    if (s.kind != ItemKind::kMotion) return true;
+    if (s.s0_mm > to_mm) return false;
+    if (s.end_mm() < from_mm) return true;
     const std::size_t slot = buf_.slot(k);
     double rate = ratio_[slot];
     if (zones && std::max(from_mm, s.s0_mm) - s.s0_mm < head_mm_[slot]) {
@@ -511,7 +580,28 @@ double AccelLimitedAccDec::r_span(double from_mm, double to_mm, bool zones) cons
       rate = std::min(rate, tail_r_[slot]);
     }
     out = std::min(out, rate);
+    return true;
+  };
+  // The walk ends at or before `last`, the item containing to_mm (items after it start past
+  // to_mm). Short spans: walked.
+  const std::uint64_t last = buf_.seek(first, to_mm);
+  const Segment& f = buf_[first];
+  if (last - first <= 8 || f.kind != ItemKind::kMotion || !(f.end_mm() > from_mm)) {
+    for (std::uint64_t k = first; k <= last && item(k); ++k) {
+    }
+    return out;
   }
+  // Long spans (many tiny segments per step): the first item (the tool's, ending after from_mm)
+  // and the last one as in the walk; every item between starts after from_mm and ends at or
+  // before to_mm (seek() skipped it), so its rate is that of the whole item: a range minimum.
+  if (!item(first)) return out;
+  const std::size_t cap = buf_.capacity();
+  const std::size_t a = buf_.slot(first + 1), n = static_cast<std::size_t>(last - first - 1);
+  const MinTree& t = zones ? r_zone_ : r_plain_;
+  const double inner = a + n <= cap ? t.min_range(a, a + n)
+                                    : std::min(t.min_range(a, cap), t.min_range(0, a + n - cap));
+  out = std::min(out, inner);
+  item(last);
   return out;
 }
 
@@ -521,7 +611,8 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   const AxisVec e = a.end_direction(), s = b.start_direction();
   const double r_ab = std::min(ratio_[sa], ratio_[slot_b]);
   const double around = std::min(vcap_[sa], vcap_[slot_b]);
-  const double v0 = std::min(around, planner::joint_speed_pc(a, b, lim_, false));
+  const double corner = planner::joint_speed_pc(a, b, lim_, false);
+  const double v0 = std::min(around, corner);
   // Headroom per axis left by the turn at v0 (7.): with both steps ≤ V and |u2 − u1| ≤ D the
   // worst second differences are V·(S_i − E_i) − D·S_i and V·(S_i − E_i) + D·E_i.
   auto d_max = [&](double v) {
@@ -552,6 +643,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     vj = std::max(vj, 0.0);
   }
   zone_vg_ = vj;
+  zone_joint_pc_ = corner;
   zone_index_a_ = index_a;
   const double rj = std::max(d / a0_, 1e-6);
   if (rj >= r_ab) return;  // the segments' own r already fits
@@ -579,6 +671,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     else
       tail_r_[sx] = rj;
     tail_mm_[sx] = std::max(tail_mm_[sx], covered);
+    update_r(k);
     first = k;
     ++walked;
   }
@@ -604,11 +697,17 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     if (buf_[k].kind != ItemKind::kMotion) continue;
     for (std::size_t c = 0; c < 3; ++c) {
       const std::size_t cs = 3 * buf_.slot(k) + c;
-      if (state_[cs] != State::kApproaching || caps_[cs].c_mm < from_mm) continue;
-      Cap cap = caps_[cs];
+      if (pos_state(cs) != State::kApproaching || caps_[owner_[cs]].c_mm < from_mm) continue;
+      const std::size_t g = owner_[cs];
+      Cap cap = caps_[g];
       cap.sigma_c = sigma_at(cap.c_mm);
       if (c == 2 && cap.v < a0_) {
         cap.lattice = cap.v >= 0.5 * a0_ && cap.sigma_c - sigma_at(cap.c_mm - cap.v) >= 0.5 * cap.v;
+      }
+      // Unchanged and still ahead of the tool: nothing to do (insert() would set the same keys).
+      if (cap.sigma_c == caps_[g].sigma_c && cap.lattice == caps_[g].lattice &&
+          pos_mm_ < entry_mm(cap)) {
+        continue;
       }
       insert(cs, cap);
     }
@@ -628,7 +727,7 @@ AccelLimitedAccDec::Bounds AccelLimitedAccDec::bound(double or_ratio, double sig
           ? kInf
           : std::max(0.0, std::sqrt(std::max(0.0, k_lat - 2 * a0_ * sigma_p)) - 0.5 * a0_);
   const double geo = std::min({active_geo_.min(), brake(key_geo_.min()), lat});
-  const double feed = std::min(or_ratio * active_feed_.min(), brake(key_feed_[level].min()));
+  const double feed = std::min(or_ratio * active_feed_.min(), brake(key_feed_.min(level)));
   return {geo, feed};
 }
 
@@ -645,7 +744,7 @@ double AccelLimitedAccDec::reference_bound(double or_ratio) const {
       std::min(levels_ - 1, static_cast<std::size_t>(std::floor(or_ratio / level_step_ + 1e-9)));
   double out = kInf;
   for (std::size_t i = 0; i < caps_.size(); ++i) {
-    if (state_[i] == State::kEmpty) continue;
+    if (state_[i] == State::kEmpty) continue;  // by id: every live cap once
     const Cap& c = caps_[i];
     if (pos_mm_ >= c.e_mm) continue;
     if (pos_mm_ >= entry_mm(c)) {
@@ -668,7 +767,7 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   advance_current();
   // Caps whose range the tool has entered, then caps it has left.
   while (entry_.min() <= pos_mm_) activate(entry_.argmin());
-  while (release_.min() <= pos_mm_) clear(release_.argmin());
+  while (release_.min() <= pos_mm_) clear(where_[release_.argmin()]);
 
   double sigma_p = sigma_total_;
   double r = 1, r_seg = 1;

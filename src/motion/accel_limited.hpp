@@ -54,13 +54,27 @@ class AccelLimitedAccDec final : public AccDec {
   };
   enum class State : std::uint8_t { kEmpty, kApproaching, kActive };
 
-  void insert(std::size_t slot, const Cap& cap);
+  // Caps live in pools (one per kind: segment speed, feed, joint), ids g = kind·pool_ + i; the
+  // trees are indexed by g. A cap *position* p = 3·slot + kind (3·capacity + kind: overflow)
+  // names the buffer slot that holds it (holds()); owner_[p] = g, where_[g] = p. Extending a
+  // cap to the next segment moves its position only: no tree update while it approaches.
+  static constexpr std::uint32_t kNone = ~std::uint32_t{0};
+  void insert(std::size_t pos, const Cap& cap);
   void insert_joint_cap(std::size_t slot_a, std::size_t slot_b, double joint_mm, double len_a,
                         double vg);
-  void activate(std::size_t slot);
-  void clear_keys(std::size_t slot);
+  void activate(std::size_t g);
+  void set_keys(std::size_t g);
+  void clear_keys(std::size_t g);
   static double entry_mm(const Cap& cap);
-  void clear(std::size_t slot);
+  void clear(std::size_t pos);
+  // Moves the cap at position `from` to the empty position `to` (same kind).
+  void move(std::size_t from, std::size_t to);
+  State pos_state(std::size_t pos) const {
+    return owner_[pos] == kNone ? State::kEmpty : state_[owner_[pos]];
+  }
+  // The lowest r of the buffer item `index` as a whole (segments strictly inside a span of
+  // r_span), with and without its joint zones: leaves of r_zone_ / r_plain_ (events: empty).
+  void update_r(std::uint64_t index);
   double sigma_at(double pos_mm) const;  // σ of a path position inside the buffer
   // ∫ r over the first x mm of the segment in `slot` (head and tail zones included).
   double seg_sigma(std::size_t slot, double x_mm) const;
@@ -91,17 +105,26 @@ class AccelLimitedAccDec final : public AccDec {
   // Passing speed the joint zones of the joint after item zone_index_a_ were computed for (a
   // joint cap when lower than the segments' caps; see 7.).
   double zone_vg_ = 0;
+  double zone_joint_pc_ = 0;  // planner::joint_speed_pc of that joint (on_joint reuses it)
   std::uint64_t zone_index_a_ = ~std::uint64_t{0};
   double sigma_total_ = 0;
 
-  // Caps: three slots per buffer slot (range cap of the segment's speed, of its feed, the cap of
-  // the joint at its start).
-  std::vector<Cap> caps_;
-  std::vector<State> state_;
+  // Caps: three positions per buffer slot (range cap of the segment's speed, of its feed, the
+  // cap of the joint at its start), each holding at most one cap of its kind, so a pool of
+  // capacity + 1 ids per kind (the overflow position included) never runs out.
+  std::size_t pool_;
+  std::vector<Cap> caps_;     // by id g
+  std::vector<State> state_;  // by id g
+  std::vector<std::uint32_t> owner_, where_;
+  std::vector<std::uint32_t> free_;  // free ids per kind: free_[kind·pool_ + k], k < free_n_
+  std::array<std::size_t, 3> free_n_{};
   planner::MinTree entry_, key_geo_, key_lattice_, active_geo_, active_feed_, release_;
-  std::vector<planner::MinTree> key_feed_;  // one per override level
-  // Slots 3·capacity + k (k = 0, 1, 2): active caps of retired segments, merged (detach()).
+  // One tree per override level (levels_ ≤ kMaxLevels), over the feed pool's ids (g − pool_).
+  static constexpr std::size_t kMaxLevels = 41;
+  planner::MinTreeRows key_feed_;
+  // Positions 3·capacity + k (k = 0, 1, 2): active caps of retired segments, merged (detach()).
   std::size_t overflow_;
+  planner::MinTree r_zone_, r_plain_;  // by buffer slot, see update_r()
 
   // Range caps of the previous segment (to extend them instead of adding a cap per segment).
   bool have_prev_ = false;
