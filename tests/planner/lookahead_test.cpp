@@ -6,6 +6,7 @@
 #include <rapidcheck.h>
 #include <rapidcheck/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -30,6 +31,44 @@ TEST(MinTree, MinAndArgminFollowUpdates) {
   EXPECT_EQ(t.argmin(), 1u);
   t.set(4, -1.0);
   EXPECT_EQ(t.argmin(), 4u);
+}
+
+// The 8-ary layout against a plain array: min, argmin (the lowest index on ties), min_range over
+// every range, for sizes around the group and level boundaries; and the node-major rows.
+TEST(MinTree, MatchesAPlainArrayAtEverySize) {
+  std::mt19937 rng(7);
+  for (std::size_t n : {1u, 2u, 7u, 8u, 9u, 63u, 64u, 65u, 513u, 1000u}) {
+    MinTree t(n);
+    MinTreeRows rows(n, 3);
+    std::vector<double> v(n, MinTree::kEmpty);
+    std::uniform_int_distribution<std::size_t> pick(0, n - 1);
+    std::uniform_int_distribution<int> val(0, 20);  // small values: many ties
+    for (int step = 0; step < 400; ++step) {
+      const std::size_t i = pick(rng);
+      v[i] = val(rng) == 0 ? MinTree::kEmpty : val(rng);
+      t.set(i, v[i]);
+      const double r[3] = {v[i], v[i] + 1, 2 * v[i]};
+      rows.set(i, r);
+      const auto it = std::min_element(v.begin(), v.end());
+      ASSERT_EQ(t.min(), *it) << "n " << n;
+      if (*it != MinTree::kEmpty) {
+        ASSERT_EQ(t.argmin(), static_cast<std::size_t>(it - v.begin())) << "n " << n;
+      }
+      ASSERT_EQ(rows.min(0), *it);
+      ASSERT_EQ(rows.min(2), 2 * *it);
+      ASSERT_EQ(rows.min(1), *it + 1);
+    }
+    for (std::size_t lo = 0; lo <= n; lo += (n > 70 ? 13 : 1)) {
+      for (std::size_t hi = lo; hi <= n; hi += (n > 70 ? 7 : 1)) {
+        const double want =
+            lo == hi ? MinTree::kEmpty : *std::min_element(v.begin() + lo, v.begin() + hi);
+        ASSERT_EQ(t.min_range(lo, hi), want) << "n " << n << " [" << lo << ", " << hi << ")";
+      }
+    }
+    rows.clear(0);
+    v[0] = MinTree::kEmpty;
+    ASSERT_EQ(rows.min(0), *std::min_element(v.begin(), v.end()));
+  }
 }
 
 // Randomised: points arrive in path order while the commanded and the (lagging) tool
