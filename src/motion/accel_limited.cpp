@@ -560,8 +560,9 @@ double AccelLimitedAccDec::seg_sigma(std::size_t slot, double x_mm) const {
   return out;
 }
 
-double AccelLimitedAccDec::r_span(double from_mm, double to_mm, bool zones) const {
-  double out = 1;
+AccelLimitedAccDec::Rates AccelLimitedAccDec::r_span(double from_mm, double to_mm) const {
+  // Both minima in one walk (with the joint zones and without: the same items).
+  Rates out;
   if (buf_.empty()) return out;
   const std::uint64_t first = std::max(cur_, buf_.begin_index()), end = buf_.end_index();
   if (first >= end) return out;
@@ -573,13 +574,14 @@ double AccelLimitedAccDec::r_span(double from_mm, double to_mm, bool zones) cons
     if (s.end_mm() < from_mm) return true;
     const std::size_t slot = buf_.slot(k);
     double rate = ratio_[slot];
-    if (zones && std::max(from_mm, s.s0_mm) - s.s0_mm < head_mm_[slot]) {
+    out.plain = std::min(out.plain, rate);
+    if (std::max(from_mm, s.s0_mm) - s.s0_mm < head_mm_[slot]) {
       rate = std::min(rate, head_r_[slot]);
     }
-    if (zones && std::min(to_mm, s.end_mm()) - s.s0_mm > s.length_mm - tail_mm_[slot]) {
+    if (std::min(to_mm, s.end_mm()) - s.s0_mm > s.length_mm - tail_mm_[slot]) {
       rate = std::min(rate, tail_r_[slot]);
     }
-    out = std::min(out, rate);
+    out.zones = std::min(out.zones, rate);
     return true;
   };
   // The walk ends at or before `last`, the item containing to_mm (items after it start past
@@ -597,10 +599,12 @@ double AccelLimitedAccDec::r_span(double from_mm, double to_mm, bool zones) cons
   if (!item(first)) return out;
   const std::size_t cap = buf_.capacity();
   const std::size_t a = buf_.slot(first + 1), n = static_cast<std::size_t>(last - first - 1);
-  const MinTree& t = zones ? r_zone_ : r_plain_;
-  const double inner = a + n <= cap ? t.min_range(a, a + n)
-                                    : std::min(t.min_range(a, cap), t.min_range(0, a + n - cap));
-  out = std::min(out, inner);
+  auto range_min = [&](const MinTree& t) {
+    return a + n <= cap ? t.min_range(a, a + n)
+                        : std::min(t.min_range(a, cap), t.min_range(0, a + n - cap));
+  };
+  out.zones = std::min(out.zones, range_min(r_zone_));
+  out.plain = std::min(out.plain, range_min(r_plain_));
   item(last);
   return out;
 }
@@ -776,8 +780,9 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     const std::size_t slot = buf_.slot(cur_);
     sigma_p = sigma0_[slot] + seg_sigma(slot, pos_mm_ - s.s0_mm);
     // The lowest r over where the next step can go (the next segment, joint zones: 7.).
-    r = r_span(pos_mm_, pos_mm_ + step_ + a0_, true);
-    r_seg = r_span(pos_mm_, pos_mm_ + step_ + a0_, false);
+    const Rates rates = r_span(pos_mm_, pos_mm_ + step_ + a0_);
+    r = rates.zones;
+    r_seg = rates.plain;
   }
   // a: the speed change allowed in this cycle; a_seg, without the joint zones: the stop's
   // lattice in real distance near the stop (the zones are in σ, which the stop bound uses).

@@ -80,7 +80,10 @@ class AccelLimitedAccDec final : public AccDec {
   double seg_sigma(std::size_t slot, double x_mm) const;
   // The lowest r over path positions [from, to] (the current segment and the following ones),
   // with or without the joint zones.
-  double r_span(double from_mm, double to_mm, bool zones) const;
+  struct Rates {
+    double zones = 1, plain = 1;
+  };
+  Rates r_span(double from_mm, double to_mm) const;
   // A joint a → b without a stop between: the acceleration zones on both sides (see 7.).
   void joint_zones(std::uint64_t index_a, std::size_t slot_b, const planner::Segment& b);
   void advance_current();
