@@ -33,8 +33,9 @@
 //        v² + 2·A0·σ(s) ≤ K_i,   K_i = V_i² + 2·A0·σ(c_i),
 //    so all caps ahead act through min_i K_i — a minimum over a sliding window (caps enter at
 //    the back as blocks arrive and retire as the tool passes them). Here: tournament trees over
-//    the cap slots (planner::MinTree, O(log n) per cap, O(1) to read); no backward pass over
-//    the window and no walk per cycle.
+//    the caps' ids (planner::MinTree, O(log n) per cap, O(1) to read); no backward pass over
+//    the window and no walk per cycle. The lowest r over a step's span (4.) is a range minimum
+//    over the buffer slots (two more trees), so a step over many tiny segments costs O(log n).
 //    Discrete form: a step x from s lands at q = s + x with σ(q) ≤ σ(s) + x (r ≤ 1), so
 //        x² + 2·A0·(σ(s) + x) ≤ K   ⇔   x ≤ B(K, s) = √(A0² + K − 2·A0·σ(s)) − A0.
 //    (i) A step that lands at or after c has σ(q) ≥ σ(c), hence x² ≤ V²: it meets V.
@@ -71,12 +72,15 @@
 //    OR_j = j·Δ (Δ = 0.1 up to 400 %): a feed cap enters every level tree with the key for OR_j;
 //    the cycle reads the tree of the highest level ≤ OR. K grows with OR, so that key is never
 //    looser than the exact one: the braking target is OR_j·F ≤ OR·F (exact at 100 %, and at
-//    every multiple of 10 %). Work: a feed cap costs one update per level when it arrives and
-//    when it is activated (only where the feed changes: equal feeds share a cap); the cycle
-//    reads one root. An override increase only raises the limits (the geometric caps and the
-//    stops, which keep every braking distance, are OR-independent); an override decrease lowers
-//    the feed limit, and the tool then decelerates at A_seg until it is below it
-//    (u ≥ u_prev − r·A0 for the feed part), which the spec and the checker allow for one ramp.
+//    every multiple of 10 %). Work: a feed cap costs one update of all levels when it arrives
+//    and when it is activated (only where the feed changes: equal feeds share a cap, and
+//    extending a cap to the next segment moves its position, not its tree leaves); the level
+//    trees are stored node-major (planner::MinTreeRows: one path of 41-wide nodes per update)
+//    over a pool of feed-cap ids, not over every cap slot; the cycle reads one root. An override
+//    increase only raises the limits (the geometric caps and the stops, which keep every braking
+//    distance, are OR-independent); an override decrease lowers the feed limit, and the tool then
+//    decelerates at A_seg until it is below it (u ≥ u_prev − r·A0 for the feed part), which the
+//    spec and the checker allow for one ramp.
 //
 // 6. Late caps. A cap that arrives while the tool is already past its c (the interpreter was
 //    late: until then the window's last end point was a stop) is active at once. The stop the
