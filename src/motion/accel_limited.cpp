@@ -513,11 +513,13 @@ void AccelLimitedAccDec::advance_current() {
   cur_ = std::max(cur_, buf_.begin_index());
   // Skip the segments the tool has passed by a galloping search over the buffer's end
   // positions (many tiny segments per cycle); the walk below then only steps over events.
-  if (cur_ + 1 < buf_.end_index()) cur_ = buf_.seek(cur_, pos_mm_);
-  while (cur_ + 1 < buf_.end_index() &&
-         (buf_[cur_].kind != ItemKind::kMotion || pos_mm_ >= buf_[cur_].end_mm())) {
-    ++cur_;
-  }
+  auto passed = [&] {
+    return cur_ + 1 < buf_.end_index() &&
+           (buf_[cur_].kind != ItemKind::kMotion || pos_mm_ >= buf_[cur_].end_mm());
+  };
+  if (!passed()) return;  // the usual cycle: still inside the same segment
+  cur_ = buf_.seek(cur_, pos_mm_);
+  while (passed()) ++cur_;
 }
 
 double AccelLimitedAccDec::sigma_at(double pos_mm) const {
@@ -588,10 +590,15 @@ AccelLimitedAccDec::Rates AccelLimitedAccDec::r_span(double from_mm, double to_m
     out.zones = std::min(out.zones, rate);
     return true;
   };
+  // The usual cycle: the step stays inside the tool's segment.
+  const Segment& f = buf_[first];
+  if (f.kind == ItemKind::kMotion && to_mm < f.end_mm()) {
+    item(first);
+    return out;
+  }
   // The walk ends at or before `last`, the item containing to_mm (items after it start past
   // to_mm). Short spans: walked.
   const std::uint64_t last = buf_.seek(first, to_mm);
-  const Segment& f = buf_[first];
   if (last - first <= 8 || f.kind != ItemKind::kMotion || !(f.end_mm() > from_mm)) {
     for (std::uint64_t k = first; k <= last && item(k); ++k) {
     }
