@@ -2,6 +2,7 @@
 // `cncore run`, the tests and the benchmarks, so that all three run exactly the same path.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -42,6 +43,15 @@ struct RunOptions {
   // When set, it decides the kernel's override every cycle; the override steps then only set
   // the operator's override it is given. Not owned.
   CycleController* cycle_controller = nullptr;
+  // Issue 3: interpret the program (interpreter + direction correction) on a producer thread
+  // that hands the blocks to the motion cycle through a lock-free ring of `ring_blocks` blocks
+  // (a power of two). The samples are bit-identical either way: the cycle takes exactly the
+  // same blocks at exactly the same cycles, and waits for the producer rather than run short.
+  // false: everything on the calling thread.
+  bool producer_thread = true;
+  std::size_t ring_blocks = 4096;
+  // Linux: pin the producer thread to this CPU (benchmarks); < 0: let the scheduler place it.
+  int producer_cpu = -1;
 };
 
 struct RunCounts {
@@ -50,7 +60,9 @@ struct RunCounts {
 };
 
 // Runs the program to its end. Throws InputError on an error in the program; samples delivered
-// before the error stay delivered (a run stops at the end of the last good block).
+// before the error stay delivered (a run stops at the end of the last good block). Observers
+// and the cycle controller are called on the calling thread only, in the same order whether
+// or not the program is interpreted on a producer thread (RunOptions::producer_thread).
 RunCounts run_program(const std::string& program_path, const MachineConfig& machine,
                       const RunOptions& options, std::vector<SampleObserver*> observers);
 
