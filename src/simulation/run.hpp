@@ -57,6 +57,10 @@ struct RunOptions {
 struct RunCounts {
   std::uint64_t blocks = 0;  // motion blocks interpreted
   std::uint64_t cycles = 0;  // samples produced
+  // With the producer thread: how often the cycle found no block ready and waited for the
+  // producer (a late block), and for how long in total (wall time).
+  std::uint64_t producer_waits = 0;
+  double producer_wait_s = 0;
 };
 
 // Runs the program to its end. Throws InputError on an error in the program; samples delivered
