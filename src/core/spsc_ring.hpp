@@ -78,6 +78,15 @@ class SpscRing {
     head_.value.store(head_.value.load(std::memory_order_relaxed) + 1, std::memory_order_release);
   }
 
+  // Consumer only: starts moving the element after front() into this core's cache, if the
+  // producer has published it (never a slot it may still be writing).
+  void prefetch_next() const {
+    const std::uint64_t next = head_.value.load(std::memory_order_relaxed) + 1;
+    if (next >= tail_cache_) return;
+    const char* p = reinterpret_cast<const char*>(&slots_[next & mask_]);
+    for (std::size_t off = 0; off < sizeof(T); off += kCacheLine) __builtin_prefetch(p + off);
+  }
+
   // Either side: the number of elements (exact for the calling side's own operations, a
   // snapshot of the other side's).
   std::size_t size() const {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
 #include <exception>
 #include <stdexcept>
 #include <thread>
@@ -28,9 +29,7 @@ bool is_motion(const Block& b) {
 }
 
 // What the block source hands the motion cycle next: a kernel block, the end of the program,
-// or an error. The bookkeeping of the source blocks interpreted on the way (motion blocks
-// counted, longest dwell for the stall watchdog) travels with it, so the cycle applies it at
-// the same point whichever thread interpreted them.
+// or an error.
 enum class ItemKind : std::uint8_t {
   kBlock,
   kEnd,
@@ -38,11 +37,10 @@ enum class ItemKind : std::uint8_t {
   kFatal,       // anything else: rethrow at once (as the single-thread path lets it through)
 };
 
-struct Item {
+// 256 bytes, on 4 whole cache lines: the hand-over between cores moves whole lines.
+struct alignas(64) Item {
+  Block block;  // kBlock
   ItemKind kind = ItemKind::kEnd;
-  std::uint32_t motion_blocks = 0;  // motion source blocks interpreted since the previous item
-  double longest_dwell_s = 0;       // longest dwell interpreted so far (running maximum)
-  Block block;                      // kBlock
 };
 
 // Interpreter → direction correction (spec 03): one kernel block per call, reading source
@@ -63,12 +61,11 @@ class BlockProducer {
       error_ = std::current_exception();
       item.kind = ItemKind::kInputError;
     }
-    item.motion_blocks = motion_blocks_;
-    item.longest_dwell_s = longest_dwell_s_;
-    motion_blocks_ = 0;
   }
 
   std::exception_ptr error() const { return error_; }
+  // Motion blocks interpreted so far (the cycle reads it once the producer has ended).
+  std::uint64_t motion_blocks() const { return motion_blocks_; }
 
  private:
   bool produce(Block& block) {
@@ -78,9 +75,6 @@ class BlockProducer {
       more_ = interpreter_.next(source_);
       if (!more_) return false;
       if (is_motion(source_)) ++motion_blocks_;
-      if (source_.kind == BlockKind::kDwell) {
-        longest_dwell_s_ = std::max(longest_dwell_s_, source_.dwell_s);
-      }
       corrector_.put(source_);
     }
   }
@@ -89,8 +83,7 @@ class BlockProducer {
   feed::DirectionCorrector corrector_;
   Block source_;
   bool more_ = true;  // the interpreter may still produce blocks
-  std::uint32_t motion_blocks_ = 0;
-  double longest_dwell_s_ = 0;
+  std::uint64_t motion_blocks_ = 0;
   std::exception_ptr error_;
 };
 
@@ -104,7 +97,7 @@ class InlineSource {
   }
   void pop() {}
   void cycle_done() {}
-  void add_waits(RunCounts&) const {}
+  void finish(RunCounts& counts) const { counts.blocks = producer_.motion_blocks(); }
   std::exception_ptr error() const { return producer_.error(); }
 
  private:
@@ -138,10 +131,14 @@ inline void cpu_relax() {
 // Waiting (outside the ring): the producer sleeps while the ring is full, until the cycle has
 // drained it to half (few wake-ups); the cycle, finding it empty, spins briefly (a block that
 // is being interpreted right now), then sleeps until the producer has queued a batch or ended.
-// Sleeping is std::atomic::wait on a wake-up counter per side, guarded by a "waiting" flag
-// (Dekker: each side stores, issues a seq_cst fence, then loads the other's variable, so at
-// least one of them sees the other and no wake-up is lost); the waker bumps the counter before
-// notify, so a wake-up that comes between the check and the wait is not lost either.
+// Sleeping is std::atomic::wait on a wake-up counter per side, guarded by a "waiting" flag; the
+// waker bumps the counter before notify, so a wake-up between the check and the wait is not
+// lost. The full fences of the Dekker handshake (store own flag, fence, load the other side's
+// state: at least one side sees the other) are paid only on the way to sleep and with the last
+// item, not per block: per block and per cycle each side only reads the other's flag. A
+// wake-up missed by such a read is made up by the next one, by the sleeping path (each side,
+// before it sleeps, also wakes the other: the ring it sleeps on is empty or full) or by the
+// fenced last item, so neither side can sleep while the other waits on it.
 class ThreadedSource {
  public:
   ThreadedSource(BlockProducer& producer, std::size_t ring_blocks, int cpu)
@@ -173,6 +170,9 @@ class ThreadedSource {
   const Item& front() {
     Item* item = ring_.front();
     if (item == nullptr) item = wait_front();
+    // The next block, if already queued, comes over from the producer's core while the kernel
+    // takes this one.
+    ring_.prefetch_next();
     return *item;
   }
   void pop() {
@@ -180,7 +180,7 @@ class ThreadedSource {
     popped_ = true;
   }
   // Once per cycle in which blocks were taken: wake the producer if it sleeps and the ring
-  // has drained to half (one fence per such cycle, not per block).
+  // has drained to half.
   void cycle_done() {
     if (!popped_) return;
     popped_ = false;
@@ -189,14 +189,15 @@ class ThreadedSource {
   std::exception_ptr error() const {
     return error_;
   }
-  void add_waits(RunCounts& counts) const {
+  // After the end item: the producer has finished counting.
+  void finish(RunCounts& counts) const {
+    counts.blocks = producer_.motion_blocks();
     counts.producer_waits = waits_;
     counts.producer_wait_s = wait_s_;
   }
 
  private:
   void wake_producer_if_drained() {
-    store_load_barrier(sync_);
     if (producer_waiting_.load(std::memory_order_relaxed) && ring_.size() <= ring_.capacity() / 2) {
       producer_waiting_.store(false, std::memory_order_relaxed);
       producer_wake_.fetch_add(1, std::memory_order_release);
@@ -207,7 +208,7 @@ class ThreadedSource {
   // Items the producer queues before it wakes a sleeping cycle (unless the program ended;
   // at most half the ring, which the producer always fills before it sleeps itself).
   static constexpr std::size_t kWakeBatch = 64;
-  static constexpr int kSpins = 4000;
+  static constexpr int kSpins = 200;
 
   Item* wait_front() {
     // The cycle may take a whole ring's worth of blocks without finishing a cycle (a kernel
@@ -234,6 +235,7 @@ class ThreadedSource {
         consumer_waiting_.store(false, std::memory_order_relaxed);
         return item;
       }
+      wake_producer_if_drained();
       consumer_wake_.wait(wake, std::memory_order_acquire);
     }
   }
@@ -253,14 +255,18 @@ class ThreadedSource {
       while (!ring_.try_push(item)) {
         if (!wait_for_space()) return;
       }
-      store_load_barrier(sync_);
+      if (last) store_load_barrier(sync_);
       if (consumer_waiting_.load(std::memory_order_relaxed) &&
           (last || ring_.size() >= wake_batch_)) {
-        consumer_waiting_.store(false, std::memory_order_relaxed);
-        consumer_wake_.fetch_add(1, std::memory_order_release);
-        consumer_wake_.notify_one();
+        wake_consumer();
       }
     }
+  }
+
+  void wake_consumer() {
+    consumer_waiting_.store(false, std::memory_order_relaxed);
+    consumer_wake_.fetch_add(1, std::memory_order_release);
+    consumer_wake_.notify_one();
   }
 
   // The ring is full: sleep until it has drained to half. false: the run is being stopped.
@@ -274,6 +280,7 @@ class ThreadedSource {
         producer_waiting_.store(false, std::memory_order_relaxed);
         return true;
       }
+      if (consumer_waiting_.load(std::memory_order_relaxed)) wake_consumer();
       producer_wake_.wait(wake, std::memory_order_acquire);
     }
   }
@@ -369,9 +376,12 @@ RunCounts run_cycles(Source& source, const std::string& program_path, const Mach
         break;
       }
       const Item& item = source.front();
-      counts.blocks += item.motion_blocks;
-      longest_dwell_s = item.longest_dwell_s;
       if (item.kind == ItemKind::kBlock) {
+        // The direction correction passes a dwell on unchanged, in the same call that read it
+        // from the interpreter: the watchdog sees it before any further cycle, as before.
+        if (item.block.kind == BlockKind::kDwell) {
+          longest_dwell_s = std::max(longest_dwell_s, item.block.dwell_s);
+        }
         for (SampleObserver* o : observers) o->on_block(item.block);
         kernel.push(item.block);
         source.pop();
@@ -400,12 +410,20 @@ RunCounts run_cycles(Source& source, const std::string& program_path, const Mach
       break;
     }
   }
-  source.add_waits(counts);
+  source.finish(counts);
   for (SampleObserver* o : observers) o->on_finish();
   return counts;
 }
 
 }  // namespace
+
+bool default_producer_thread() {
+  static const bool value = [] {
+    const char* v = std::getenv("CNCORE_PRODUCER_THREAD");
+    return v != nullptr && std::string(v) == "1";
+  }();
+  return value;
+}
 
 RunCounts run_program(const std::string& program_path, const MachineConfig& machine,
                       const RunOptions& options, std::vector<SampleObserver*> observers) {

@@ -35,6 +35,10 @@ class CycleController {
   virtual double on_cycle(motion::Sample& sample, double operator_override_pct) noexcept = 0;
 };
 
+// CNCORE_PRODUCER_THREAD from the environment ("1": true, anything else: false), false when
+// unset. Read once per process.
+bool default_producer_thread();
+
 struct RunOptions {
   motion::KernelOptions kernel;
   interp::Options interpreter;
@@ -47,8 +51,11 @@ struct RunOptions {
   // that hands the blocks to the motion cycle through a lock-free ring of `ring_blocks` blocks
   // (a power of two). The samples are bit-identical either way: the cycle takes exactly the
   // same blocks at exactly the same cycles, and waits for the producer rather than run short.
-  // false: everything on the calling thread.
-  bool producer_thread = true;
+  // false: everything on the calling thread. Off by default: on the shared 2-core machine it
+  // was not consistently faster (bench/README.md, bench_pipeline). The default can be set for
+  // a whole process (A/B measurements of `cncore run`, which has no flag for it) with the
+  // environment variable CNCORE_PRODUCER_THREAD=1.
+  bool producer_thread = default_producer_thread();
   std::size_t ring_blocks = 4096;
   // Linux: pin the producer thread to this CPU (benchmarks); < 0: let the scheduler place it.
   int producer_cpu = -1;
