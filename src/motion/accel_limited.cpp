@@ -125,7 +125,29 @@
 //    Not covered: a zone reaching back over more than kZoneWalk segments (tiny segments with a
 //    sharp corner: the corner cap then keeps V small, so 2V spans few of them).
 //
-// No filter follows, so the tool position is the commanded position and at rest means step 0.
+// 8. Jerk stage and post filter. With a jerk limit the tool's step is the moving average of the
+//    last T2 commanded steps (T2 = ⌈2·Amax/(Jmax·τ)⌉, planner::make_limits): its acceleration is
+//    (u_k − u_{k−T2})/T2, within what the commanded steps use, and its jerk
+//    (a_k − a_{k−T2})/T2 ≤ 2·A0/T2 ≤ Jmax·τ³ — tangential jerk; the tool stays on the path, the
+//    filter runs on the path position. The post-interpolation filter (Tp cycles, kernel) averages
+//    the axis positions after it; its corner rounding v·(Tp + 1)·sin θ/8 ≤ tolerance holds when
+//    the speed is ≤ the corner's Vg (planner::joint_speed_pc) for the Tp cycles around the corner.
+//    Both average the commanded motion over at most lag = T2 + Tp cycles, so:
+//      - every cap reaches lag·V further on both sides ([c − lag·V, e + lag·V), a corner
+//        [j − (1 + lag)·Vg, j + (1 + lag)·Vg)): if every commanded step in that range is ≤ V, an
+//        output step in [c, e) averages only such steps (the commanded position is at most
+//        lag·V ahead of the output, and the output reaches c only after the mean of its window
+//        does);
+//      - a joint zone (7.) spans [j − (2 + lag)·V, j + (1 + lag)·V] (past b into the segments
+//        after it through a carried head zone);
+//      - the output at p averages the commanded accelerations over [p, p + lag·v], so a segment
+//        with r < 1 carries its r over the next lag·v_top mm (a head zone of the later segments;
+//        v_top the highest step allowed so far).
+//    Not covered: a block arriving late (the tool already braking for the window's end, 6.)
+//    whose widened caps start behind the commanded position — the steps already in the filter
+//    were not bounded by them.
+//
+// Without a filter the tool position is the commanded position and at rest means step 0.
 #include "motion/accel_limited.hpp"
 
 #include <algorithm>
@@ -199,7 +221,11 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       overflow_(3 * buffer.capacity()),
       r_zone_(buffer.capacity()),
       r_plain_(buffer.capacity()),
-      check_(check_reference_walk) {
+      check_(check_reference_walk),
+      jerk_(limits.t2_cycles > 1 ? limits.t2_cycles : 1),
+      jerk_on_(limits.t2_cycles > 1),
+      lag_((limits.t2_cycles > 1 ? limits.t2_cycles : 0.0) +
+           (limits.post_filter() ? limits.post_cycles : 0.0)) {
   // Free ids, lowest on top.
   for (std::size_t k = 0; k < 3; ++k) {
     for (std::size_t i = 0; i < pool_; ++i) {
@@ -229,8 +255,9 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   // outside the plane and the rotary axes move linearly too).
   for (std::size_t i = 0; i < kMaxAxes; ++i) {
     if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
-    if (s.arc && i < 3) continue;
-    const double d = std::abs(delta[i]) / s.length_mm;
+    // On a helix the axis along the arc's normal rises linearly: its share is rise/L.
+    const double d = s.arc && i < 3 ? std::abs(s.rise_mm * component(s.n, i)) / s.length_mm
+                                    : std::abs(delta[i]) / s.length_mm;
     if (d > 1e-12) r = std::min(r, lim_.axis_amax_pc2[i] / (d * a0_));
   }
   if (s.arc) {
@@ -256,6 +283,21 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   len_mm_[slot] = s.length_mm;
   head_mm_[slot] = tail_mm_[slot] = 0;
   head_r_[slot] = tail_r_[slot] = 1;
+  // Head zones reaching here from earlier segments (8.); expired ones are dropped.
+  for (std::size_t k = 0; k < n_carries_;) {
+    if (carries_[k].until_mm <= s.s0_mm) {
+      carries_[k] = carries_[--n_carries_];
+      continue;
+    }
+    add_head(slot, carries_[k].until_mm - s.s0_mm, carries_[k].r);
+    ++k;
+  }
+  if (lag_ > 0) {
+    vtop_pc_ = std::max(vtop_pc_, std::min(vcap, s.feed_pc * or_max_));
+    // The output at p averages the commanded accelerations over [p, p + lag·v]: a commanded
+    // step may use only the lowest r of the lag·v behind it.
+    if (r < 1) carry(s.end_mm() + lag_ * vtop_pc_, r);
+  }
 
   const bool contiguous = have_prev_ && prev_end_mm_ == s.s0_mm;
   // A joint (the kernel calls on_joint next) unless an event that stops lies between.
@@ -266,8 +308,16 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   update_r(index);
   sigma0_[slot] = sigma_total_;
   sigma_total_ += seg_sigma(slot, s.length_mm);
-  const Cap caps[2] = {{s.s0_mm, s.end_mm(), vcap, sigma0_[slot], false, vcap >= a0_},
-                       {s.s0_mm, s.end_mm(), s.feed_pc, sigma0_[slot], true, false}};
+  // With a filter after this type (8.) a cap reaches lag·V further on both sides (a feed cap's
+  // speed is up to OR_max·F).
+  const double reach[2] = {lag_ * vcap, lag_ * s.feed_pc * or_max_};
+  auto widened = [&](double v, bool feed, bool lattice, double r_reach) {
+    Cap cap{s.s0_mm - r_reach, s.end_mm() + r_reach, v, sigma0_[slot], feed, lattice};
+    if (r_reach > 0) cap.sigma_c = sigma_at(cap.c_mm);
+    return cap;
+  };
+  const Cap caps[2] = {widened(vcap, false, vcap >= a0_, reach[0]),
+                       widened(s.feed_pc, true, false, reach[1])};
   for (std::size_t k = 0; k < 2; ++k) {
     const std::size_t to = 3 * slot + k;
     if (contiguous) {
@@ -278,7 +328,7 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
         clear(to);
         move(from, to);
         const std::size_t g = owner_[to];
-        caps_[g].e_mm = s.end_mm();
+        caps_[g].e_mm = s.end_mm() + reach[k];
         if (state_[g] == State::kActive) {
           release_.set(g, caps_[g].e_mm);
         } else if (pos_mm_ >= entry_mm(caps_[g])) {
@@ -298,9 +348,11 @@ void AccelLimitedAccDec::insert_joint_cap(std::size_t slot_a, std::size_t slot_b
                                           double len_a, double vg) {
   // σ(j − Vg), exact (inside a directly, before a by a search of the buffer): a key with a σ
   // lower than the true σ(c) would make the bound reach 0 before c (a stall) where r < 1.
-  const double c_mm = joint_mm - vg;
+  // The cap covers the step before and after the joint, and lag·Vg more with a filter (8.).
+  const double w = vg * (1 + lag_);
+  const double c_mm = joint_mm - w;
   const double sigma_c =
-      vg <= len_a ? sigma0_[slot_a] + seg_sigma(slot_a, len_a - vg) : sigma_at(c_mm);
+      w <= len_a ? sigma0_[slot_a] + seg_sigma(slot_a, len_a - w) : sigma_at(c_mm);
   // Lattice form where it cannot stall before the cap takes over (see 3.): V ≥ A0, or V ≥ A0/2
   // with mean r ≥ 1/2 over [c − V, c] (the bound is 0 at (V − V²/A0)/(2·r) ≤ V/2 before c).
   bool lattice = vg >= a0_;
@@ -308,7 +360,7 @@ void AccelLimitedAccDec::insert_joint_cap(std::size_t slot_a, std::size_t slot_b
   // Kept in b's slot: the range reaches into b (and past it when b is short), and b stays in
   // the buffer anyway while the tool is in it; in a's slot, a full small buffer could wait for
   // a block that cannot arrive before a is retired.
-  insert(3 * slot_b + 2, Cap{joint_mm - vg, joint_mm + vg, vg, sigma_c, false, lattice});
+  insert(3 * slot_b + 2, Cap{c_mm, joint_mm + w, vg, sigma_c, false, lattice});
 }
 
 void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const Segment& b) {
@@ -508,6 +560,23 @@ void AccelLimitedAccDec::update_r(std::uint64_t index) {
   r_plain_.set(slot, ratio_[slot]);
 }
 
+void AccelLimitedAccDec::add_head(std::size_t slot, double mm, double r) {
+  if (mm <= 0 || r >= 1) return;
+  head_r_[slot] = head_mm_[slot] > 0 ? std::min(head_r_[slot], r) : r;
+  head_mm_[slot] = std::max(head_mm_[slot], mm);
+}
+
+void AccelLimitedAccDec::carry(double until_mm, double r) {
+  if (n_carries_ == kCarries) {
+    // Full: merge the two that end first (the lower r over the longer reach: stricter).
+    std::sort(carries_.begin(), carries_.end(),
+              [](const Carry& x, const Carry& y) { return x.until_mm < y.until_mm; });
+    carries_[1] = {carries_[1].until_mm, std::min(carries_[0].r, carries_[1].r)};
+    carries_[0] = carries_[--n_carries_];
+  }
+  carries_[n_carries_++] = {until_mm, r};
+}
+
 void AccelLimitedAccDec::advance_current() {
   if (buf_.empty()) return;
   cur_ = std::max(cur_, buf_.begin_index());
@@ -668,7 +737,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   // The zone [j − 2V, j] may reach back over several short segments (at most kZoneWalk): each
   // gets it as (part of) its tail zone. Never under or behind the tool (σ there is in use; a
   // late joint, see 6.).
-  const double zone_start = std::max(a.end_mm() - 2 * v, pos_mm_);
+  const double zone_start = std::max(a.end_mm() - (2 + lag_) * v, pos_mm_);
   std::uint64_t first = index_a + 1;
   std::size_t walked = 0;
   for (std::uint64_t k = index_a + 1;
@@ -690,8 +759,9 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     first = k;
     ++walked;
   }
-  head_mm_[slot_b] = std::min(b.length_mm, v);
-  head_r_[slot_b] = rj;
+  const double head = (1 + lag_) * v;
+  add_head(slot_b, std::min(b.length_mm, head), rj);
+  if (lag_ > 0 && head > b.length_mm) carry(a.end_mm() + head, rj);
   if (first > index_a) return;
   // σ after the first changed segment moved: the starts of the later ones, the end of the
   // window, the cached σ of the stop, and the keys of the caps from there on (exact σ(c)).
@@ -790,8 +860,13 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     const Segment& s = buf_[cur_];
     const std::size_t slot = buf_.slot(cur_);
     sigma_p = sigma0_[slot] + seg_sigma(slot, pos_mm_ - s.s0_mm);
-    // The lowest r over where the next step can go (the next segment, joint zones: 7.).
-    const Rates rates = r_span(pos_mm_, pos_mm_ + step_ + a0_);
+    // The lowest r over where the next step can go (the next segment, joint zones: 7.) — not
+    // past a stop ahead: a segment after it with a lower r would make the landing lattice near
+    // the stop switch to that r, a deceleration step of up to 1.5·A0 (found with the post
+    // filter, whose exact-path corners are stops).
+    double reach = pos_mm_ + step_ + a0_;
+    if (in.stop_mm > pos_mm_) reach = std::min(reach, std::nextafter(in.stop_mm, pos_mm_));
+    const Rates rates = r_span(pos_mm_, reach);
     r = rates.zones;
     r_seg = rates.plain;
   }
@@ -829,7 +904,7 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   double u = in.hold ? step_ - a : step_ + a;
   // Around a corner (a joint cap active) the speed does not rise, except from a near stop up
   // to V_t (a stop right at a corner: the first steps are then ≤ V_t, within every axis limit).
-  if (active_joints_ > 0) u = std::min(u, std::max(step_, tail_cap_pc_));
+  if (active_joints_ > 0 && lag_ == 0) u = std::min(u, std::max(step_, tail_cap_pc_));
   // Geometric caps and stops are hard limits, and so is the feed limit while the override has
   // not been lowered (following its bound needs no more than the deceleration of the zone just
   // run, 3. (ii) and 7.). After an override decrease the feed limit may drop by more than one
@@ -846,6 +921,14 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     pos_mm_ += u;
   }
   step_ = u;
+  if (!jerk_on_) {
+    tool_mm_ = pos_mm_;
+    tool_step_ = u;
+    return;
+  }
+  // Jerk stage (8.): the tool's step is the mean of the last T2 commanded steps.
+  tool_step_ = jerk_.push(u);
+  tool_mm_ = jerk_.at_rest() ? pos_mm_ : std::min(tool_mm_ + tool_step_, pos_mm_);
 }
 
 }  // namespace cncore::motion

@@ -10,6 +10,7 @@
 
 #include "core/geometry.hpp"
 #include "motion/accdec.hpp"
+#include "motion/moving_average.hpp"
 #include "planner/buffer.hpp"
 #include "planner/min_tree.hpp"
 
@@ -30,10 +31,12 @@ class AccelLimitedAccDec final : public AccDec {
   bool detach(std::uint64_t index) override;
   void step(const CycleInput& in) override;
 
-  double tool_mm() const override { return pos_mm_; }
-  double tool_speed_pc() const override { return step_; }
+  // With a jerk stage (T2 > 1) the tool follows the commanded position through a moving
+  // average of T2 cycles (8.); without one it is the commanded position.
+  double tool_mm() const override { return tool_mm_; }
+  double tool_speed_pc() const override { return tool_step_; }
   double commanded_mm() const override { return pos_mm_; }
-  bool at_rest() const override { return step_ == 0; }
+  bool at_rest() const override { return step_ == 0 && jerk_.at_rest(); }
 
   // The plain minimum over every live cap, by a walk (O(n); tests compare it with the trees).
   double reference_bound(double or_ratio) const;
@@ -87,6 +90,11 @@ class AccelLimitedAccDec final : public AccDec {
   // A joint a → b without a stop between: the acceleration zones on both sides (see 7.).
   void joint_zones(std::uint64_t index_a, std::size_t slot_b, const planner::Segment& b);
   void advance_current();
+  // Lowers r over the first `mm` of the segment in `slot` to at most `r` (head zone).
+  void add_head(std::size_t slot, double mm, double r);
+  // A head zone that reaches past the segment it starts in (8.): r ≤ `r` up to path position
+  // `until_mm`, applied to each later segment as it arrives.
+  void carry(double until_mm, double r);
   struct Bounds {
     double geo, feed;
   };
@@ -153,6 +161,20 @@ class AccelLimitedAccDec final : public AccDec {
   bool feed_recover_ = false;  // lowered override: above the feed limit, decelerating to it
   bool check_ = false;
   std::uint64_t mismatches_ = 0;
+
+  // Jerk stage and post filter (8.): the output averages the commanded steps over lag_ cycles
+  // at most, so every cap reaches lag_·V further on both sides.
+  MovingAverage jerk_;
+  bool jerk_on_ = false;
+  double lag_ = 0;
+  double tool_mm_ = 0, tool_step_ = 0;
+  double vtop_pc_ = 0;  // the highest step any segment so far allows (the r carry's reach)
+  struct Carry {
+    double until_mm = 0, r = 1;
+  };
+  static constexpr std::size_t kCarries = 8;
+  std::array<Carry, kCarries> carries_{};
+  std::size_t n_carries_ = 0;
 };
 
 }  // namespace cncore::motion

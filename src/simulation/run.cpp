@@ -1,10 +1,23 @@
 #include "simulation/run.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdlib>
 #include <exception>
 #include <stdexcept>
+#include <thread>
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
+#if defined(__linux__)
+#include <pthread.h>
+#include <sched.h>
+#endif
 
 #include "core/error.hpp"
+#include "core/spsc_ring.hpp"
 #include "feedcontrol/direction_correction.hpp"
 
 namespace cncore::sim {
@@ -15,11 +28,286 @@ bool is_motion(const Block& b) {
   return b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc;
 }
 
-}  // namespace
+// What the block source hands the motion cycle next: a kernel block, the end of the program,
+// or an error.
+enum class ItemKind : std::uint8_t {
+  kBlock,
+  kEnd,
+  kInputError,  // stop at the end of the last good block, then rethrow
+  kFatal,       // anything else: rethrow at once (as the single-thread path lets it through)
+};
 
-RunCounts run_program(const std::string& program_path, const MachineConfig& machine,
-                      const RunOptions& options, std::vector<SampleObserver*> observers) {
-  interp::Interpreter interpreter(program_path, machine, options.interpreter);
+// 256 bytes, on 4 whole cache lines: the hand-over between cores moves whole lines.
+struct alignas(64) Item {
+  Block block;  // kBlock
+  ItemKind kind = ItemKind::kEnd;
+};
+
+// Interpreter → direction correction (spec 03): one kernel block per call, reading source
+// blocks only as needed, so memory stays bounded whatever the program length. One interpreted
+// block may give several kernel blocks (an arc split by the direction correction).
+class BlockProducer {
+ public:
+  BlockProducer(const std::string& program_path, const MachineConfig& machine,
+                const interp::Options& options)
+      : interpreter_(program_path, machine, options), corrector_(machine, program_path) {}
+
+  // Fills `item` (kBlock / kEnd / kInputError; the InputError in error()). Other exceptions
+  // propagate.
+  void next(Item& item) {
+    try {
+      item.kind = produce(item.block) ? ItemKind::kBlock : ItemKind::kEnd;
+    } catch (const InputError&) {
+      error_ = std::current_exception();
+      item.kind = ItemKind::kInputError;
+    }
+  }
+
+  std::exception_ptr error() const { return error_; }
+  // Motion blocks interpreted so far (the cycle reads it once the producer has ended).
+  std::uint64_t motion_blocks() const { return motion_blocks_; }
+
+ private:
+  bool produce(Block& block) {
+    while (true) {
+      if (corrector_.next(block)) return true;
+      if (!more_) return false;
+      more_ = interpreter_.next(source_);
+      if (!more_) return false;
+      if (is_motion(source_)) ++motion_blocks_;
+      corrector_.put(source_);
+    }
+  }
+
+  interp::Interpreter interpreter_;
+  feed::DirectionCorrector corrector_;
+  Block source_;
+  bool more_ = true;  // the interpreter may still produce blocks
+  std::uint64_t motion_blocks_ = 0;
+  std::exception_ptr error_;
+};
+
+// The single-thread source: produces each item when the cycle asks for it.
+class InlineSource {
+ public:
+  explicit InlineSource(BlockProducer& producer) : producer_(producer) {}
+  const Item& front() {
+    producer_.next(item_);
+    return item_;
+  }
+  void pop() {}
+  void cycle_done() {}
+  void finish(RunCounts& counts) const { counts.blocks = producer_.motion_blocks(); }
+  std::exception_ptr error() const { return producer_.error(); }
+
+ private:
+  BlockProducer& producer_;
+  Item item_;
+};
+
+// A full barrier between a store and a later load of another variable (the Dekker handshake
+// below). ThreadSanitizer does not model fences (gcc refuses them under -fsanitize=thread):
+// there an acq_rel read-modify-write of one shared variable orders the two sides instead
+// (whichever RMW comes second acquires what the other side stored before its own).
+inline void store_load_barrier([[maybe_unused]] std::atomic<std::uint32_t>& sync) {
+#if defined(__SANITIZE_THREAD__)
+  sync.fetch_add(0, std::memory_order_acq_rel);
+#else
+  std::atomic_thread_fence(std::memory_order_seq_cst);
+#endif
+}
+
+inline void cpu_relax() {
+#if defined(__x86_64__) || defined(__i386__)
+  _mm_pause();
+#else
+  std::this_thread::yield();
+#endif
+}
+
+// The threaded source: a producer thread runs the BlockProducer ahead of the cycle and hands
+// the items through a lock-free SPSC ring; the cycle reads them in place.
+//
+// Waiting (outside the ring): the producer sleeps while the ring is full, until the cycle has
+// drained it to half (few wake-ups); the cycle, finding it empty, spins briefly (a block that
+// is being interpreted right now), then sleeps until the producer has queued a batch or ended.
+// Sleeping is std::atomic::wait on a wake-up counter per side, guarded by a "waiting" flag; the
+// waker bumps the counter before notify, so a wake-up between the check and the wait is not
+// lost. The full fences of the Dekker handshake (store own flag, fence, load the other side's
+// state: at least one side sees the other) are paid only on the way to sleep and with the last
+// item, not per block: per block and per cycle each side only reads the other's flag. A
+// wake-up missed by such a read is made up by the next one, by the sleeping path (each side,
+// before it sleeps, also wakes the other: the ring it sleeps on is empty or full) or by the
+// fenced last item, so neither side can sleep while the other waits on it.
+class ThreadedSource {
+ public:
+  ThreadedSource(BlockProducer& producer, std::size_t ring_blocks, int cpu)
+      : producer_(producer),
+        ring_(ring_blocks),
+        wake_batch_(std::min<std::size_t>(kWakeBatch, ring_blocks / 2)) {
+    thread_ = std::thread([this] { run(); });
+#if defined(__linux__)
+    if (cpu >= 0) {
+      cpu_set_t set;
+      CPU_ZERO(&set);
+      CPU_SET(static_cast<unsigned>(cpu), &set);
+      pthread_setaffinity_np(thread_.native_handle(), sizeof set, &set);
+    }
+#else
+    (void)cpu;
+#endif
+  }
+  ThreadedSource(const ThreadedSource&) = delete;
+  ThreadedSource& operator=(const ThreadedSource&) = delete;
+  // Stops the producer wherever it is (an observer may throw mid-run) and joins it.
+  ~ThreadedSource() {
+    stop_.store(true, std::memory_order_seq_cst);
+    producer_wake_.fetch_add(1, std::memory_order_seq_cst);
+    producer_wake_.notify_one();
+    thread_.join();
+  }
+
+  const Item& front() {
+    Item* item = ring_.front();
+    if (item == nullptr) item = wait_front();
+    // The next block, if already queued, comes over from the producer's core while the kernel
+    // takes this one.
+    ring_.prefetch_next();
+    return *item;
+  }
+  void pop() {
+    ring_.pop();
+    popped_ = true;
+  }
+  // Once per cycle in which blocks were taken: wake the producer if it sleeps and the ring
+  // has drained to half.
+  void cycle_done() {
+    if (!popped_) return;
+    popped_ = false;
+    wake_producer_if_drained();
+  }
+  std::exception_ptr error() const {
+    return error_;
+  }
+  // After the end item: the producer has finished counting.
+  void finish(RunCounts& counts) const {
+    counts.blocks = producer_.motion_blocks();
+    counts.producer_waits = waits_;
+    counts.producer_wait_s = wait_s_;
+  }
+
+ private:
+  void wake_producer_if_drained() {
+    if (producer_waiting_.load(std::memory_order_relaxed) && ring_.size() <= ring_.capacity() / 2) {
+      producer_waiting_.store(false, std::memory_order_relaxed);
+      producer_wake_.fetch_add(1, std::memory_order_release);
+      producer_wake_.notify_one();
+    }
+  }
+
+  // Items the producer queues before it wakes a sleeping cycle (unless the program ended;
+  // at most half the ring, which the producer always fills before it sleeps itself).
+  static constexpr std::size_t kWakeBatch = 64;
+  static constexpr int kSpins = 200;
+
+  Item* wait_front() {
+    // The cycle may take a whole ring's worth of blocks without finishing a cycle (a kernel
+    // buffer larger than the ring): the producer may be asleep on a ring that is now empty.
+    wake_producer_if_drained();
+    // Timed only here, off the fast path (a clock read costs ~25 ns).
+    ++waits_;
+    struct AddTime {
+      double& sum;
+      std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
+      ~AddTime() {
+        sum += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      }
+    } add_time{wait_s_};
+    for (int i = 0; i < kSpins; ++i) {
+      cpu_relax();
+      if (Item* item = ring_.front()) return item;
+    }
+    while (true) {
+      const std::uint32_t wake = consumer_wake_.load(std::memory_order_acquire);
+      consumer_waiting_.store(true, std::memory_order_relaxed);
+      store_load_barrier(sync_);
+      if (Item* item = ring_.front()) {
+        consumer_waiting_.store(false, std::memory_order_relaxed);
+        return item;
+      }
+      wake_producer_if_drained();
+      consumer_wake_.wait(wake, std::memory_order_acquire);
+    }
+  }
+
+  void run() {
+    Item item;
+    bool last = false;
+    while (!last && !stop_.load(std::memory_order_relaxed)) {
+      try {
+        producer_.next(item);
+        if (item.kind == ItemKind::kInputError) error_ = producer_.error();
+      } catch (...) {
+        error_ = std::current_exception();
+        item.kind = ItemKind::kFatal;
+      }
+      last = item.kind != ItemKind::kBlock;
+      while (!ring_.try_push(item)) {
+        if (!wait_for_space()) return;
+      }
+      if (last) store_load_barrier(sync_);
+      if (consumer_waiting_.load(std::memory_order_relaxed) &&
+          (last || ring_.size() >= wake_batch_)) {
+        wake_consumer();
+      }
+    }
+  }
+
+  void wake_consumer() {
+    consumer_waiting_.store(false, std::memory_order_relaxed);
+    consumer_wake_.fetch_add(1, std::memory_order_release);
+    consumer_wake_.notify_one();
+  }
+
+  // The ring is full: sleep until it has drained to half. false: the run is being stopped.
+  bool wait_for_space() {
+    while (true) {
+      const std::uint32_t wake = producer_wake_.load(std::memory_order_acquire);
+      producer_waiting_.store(true, std::memory_order_relaxed);
+      store_load_barrier(sync_);
+      if (stop_.load(std::memory_order_relaxed)) return false;
+      if (ring_.size() <= ring_.capacity() / 2) {
+        producer_waiting_.store(false, std::memory_order_relaxed);
+        return true;
+      }
+      if (consumer_waiting_.load(std::memory_order_relaxed)) wake_consumer();
+      producer_wake_.wait(wake, std::memory_order_acquire);
+    }
+  }
+
+  BlockProducer& producer_;
+  SpscRing<Item> ring_;
+  const std::size_t wake_batch_;
+  std::atomic<bool> stop_{false};
+  std::atomic<std::uint32_t> sync_{0};  // store_load_barrier under ThreadSanitizer only
+  // Producer side sleeps on producer_wake_, the cycle on consumer_wake_ (separate lines).
+  alignas(64) std::atomic<bool> producer_waiting_{false};
+  std::atomic<std::uint32_t> producer_wake_{0};
+  alignas(64) std::atomic<bool> consumer_waiting_{false};
+  std::atomic<std::uint32_t> consumer_wake_{0};
+  alignas(64) bool popped_ = false;  // consumer's
+  std::uint64_t waits_ = 0;          // consumer's
+  double wait_s_ = 0;                // consumer's
+  std::exception_ptr error_;         // written by the producer before it queues the error item
+  std::thread thread_;               // last: started once everything above is constructed
+};
+
+// The motion cycle: takes blocks from `source` whenever the kernel has room, steps the kernel,
+// hands samples to the observers. The same code for both sources, so both paths make exactly
+// the same kernel calls in the same order.
+template <typename Source>
+RunCounts run_cycles(Source& source, const std::string& program_path, const MachineConfig& machine,
+                     const RunOptions& options, const std::vector<SampleObserver*>& observers) {
   motion::Kernel kernel(machine, options.kernel);
   RunCounts counts;
   motion::Sample sample;
@@ -77,54 +365,76 @@ RunCounts run_program(const std::string& program_path, const MachineConfig& mach
     return true;
   };
 
-  bool more = true;  // the interpreter may still produce blocks
-  Block source;      // interpreted block
-  Block block;       // what the kernel gets: the direction-correction stage's output (spec 03)
-  feed::DirectionCorrector corrector(machine, program_path);
+  bool ended = false;  // the source has delivered the end of the program
   while (true) {
-    // Stream: read blocks only while the execution-data buffer has room, so memory stays
-    // bounded by the buffer whatever the program length. One interpreted block may give
-    // several kernel blocks (an arc split by the direction correction), one at a time.
+    // Take blocks only while the execution-data buffer has room, so memory stays bounded by the
+    // buffer whatever the program length. When the source has nothing ready yet, front()
+    // waits: the cycle must not run ahead of a block that is merely late.
     while (kernel.wants_block()) {
-      bool got = false;
-      try {
-        got = corrector.next(block);
-        if (!got && more) {
-          more = interpreter.next(source);
-          if (more) {
-            if (is_motion(source)) ++counts.blocks;
-            if (source.kind == BlockKind::kDwell)
-              longest_dwell_s = std::max(longest_dwell_s, source.dwell_s);
-            corrector.put(source);
-            continue;
-          }
-        }
-      } catch (const InputError&) {
-        // Stop at the end of the last good block: the samples up to there are delivered, then
-        // the error goes on to the caller (which discards its output files).
-        const std::exception_ptr error = std::current_exception();
+      if (ended) {
         kernel.end_of_program();
-        while (step()) {
-        }
-        std::rethrow_exception(error);
-      }
-      if (!got) {
-        if (!more) kernel.end_of_program();
         break;
       }
-      for (SampleObserver* o : observers) o->on_block(block);
-      kernel.push(block);
+      const Item& item = source.front();
+      if (item.kind == ItemKind::kBlock) {
+        // The direction correction passes a dwell on unchanged, in the same call that read it
+        // from the interpreter: the watchdog sees it before any further cycle, as before.
+        if (item.block.kind == BlockKind::kDwell) {
+          longest_dwell_s = std::max(longest_dwell_s, item.block.dwell_s);
+        }
+        for (SampleObserver* o : observers) o->on_block(item.block);
+        kernel.push(item.block);
+        source.pop();
+        continue;
+      }
+      const ItemKind kind = item.kind;
+      source.pop();
+      if (kind == ItemKind::kFatal) std::rethrow_exception(source.error());
+      kernel.end_of_program();
+      if (kind == ItemKind::kInputError) {
+        // Stop at the end of the last good block: the samples up to there are delivered, then
+        // the error goes on to the caller (which discards its output files).
+        while (step()) {
+        }
+        std::rethrow_exception(source.error());
+      }
+      ended = true;
+      break;
     }
+    source.cycle_done();
     if (!step()) {
-      if (more) {
+      if (!ended) {
         // The kernel contract: step() returns false only after end_of_program().
         throw std::logic_error("motion kernel stopped before the end of the program");
       }
       break;
     }
   }
+  source.finish(counts);
   for (SampleObserver* o : observers) o->on_finish();
   return counts;
+}
+
+}  // namespace
+
+bool default_producer_thread() {
+  static const bool value = [] {
+    const char* v = std::getenv("CNCORE_PRODUCER_THREAD");
+    return v != nullptr && std::string(v) == "1";
+  }();
+  return value;
+}
+
+RunCounts run_program(const std::string& program_path, const MachineConfig& machine,
+                      const RunOptions& options, std::vector<SampleObserver*> observers) {
+  // Constructed here, on the calling thread: a missing file throws before anything runs.
+  BlockProducer producer(program_path, machine, options.interpreter);
+  if (!options.producer_thread) {
+    InlineSource source(producer);
+    return run_cycles(source, program_path, machine, options, observers);
+  }
+  ThreadedSource source(producer, options.ring_blocks, options.producer_cpu);
+  return run_cycles(source, program_path, machine, options, observers);
 }
 
 }  // namespace cncore::sim

@@ -32,9 +32,10 @@ struct Limits {
   // speed 4q/τ, acceleration 8q/τ², jerk 16q/τ³.
   double position_resolution_mm = 1e-9;
   // P2 after a runtime override decrease: the speed may follow the limit that was in force up
-  // to this long before (the acc/dec ramp). < 0: automatic, max(feed, rapid)/Amax (+ Amax/Jmax
-  // with a jerk limit) + 2τ.
+  // to this long before (the acc/dec ramp). < 0: automatic, max(feed, rapid)/Amax (+ 2·Amax/Jmax,
+  // the jerk stage's span, with a jerk limit; + the post filter's span) + 2τ.
   double override_ramp_s = -1;
+  double post_filter_s = 0;               // span of the post-interpolation filter (0: none)
   bool override_applies_to_rapid = true;  // false: rapids always at most the rapid rate
   double max_resultant_accel_mm_s2 = 0;   // > 0: also check the resultant acceleration
   bool check_jerk = true;                 // only when max_jerk_mm_s3 > 0
@@ -44,8 +45,8 @@ struct Limits {
   double ramp_s() const {
     if (override_ramp_s >= 0) return override_ramp_s;
     double r = std::max(max_feed_mm_min, rapid_mm_min) / 60.0 / max_accel_mm_s2 + 2 * period_s;
-    if (max_jerk_mm_s3 > 0) r += max_accel_mm_s2 / max_jerk_mm_s3;
-    return r;
+    if (max_jerk_mm_s3 > 0) r += 2 * max_accel_mm_s2 / max_jerk_mm_s3;
+    return r + post_filter_s;
   }
 };
 
@@ -57,6 +58,7 @@ inline Limits limits_from_config(const MachineConfig& m) {
   l.rapid_mm_min = m.rapid_mm_min;
   l.max_accel_mm_s2 = m.max_accel_mm_s2;
   l.max_jerk_mm_s3 = m.max_jerk_mm_s3;
+  l.post_filter_s = m.post_filter_s;
   l.max_override_pct = m.max_override_pct;
   for (std::size_t i = 0; i < kMaxAxes; ++i) {
     if (!m.axes[i].enabled) continue;

@@ -349,6 +349,51 @@ TEST(TrajectoryChecker, JerkIsMeasuredOnTheTangentialProfile) {
   EXPECT_EQ(rep.count(Property::kJerk), 48u);
 }
 
+// A corner rounded by a filter at constant speed: the samples on the fillet are off the path,
+// where the speed is the chord's and the projection no longer follows the tool, so the
+// tangential acceleration computed across the fillet jumps although the speed does not change.
+// Windows that turn a corner are not charged jerk; the same jerk on a straight stretch is.
+TEST(TrajectoryChecker, JerkIsNotChargedForTheTurnAtACorner) {
+  const std::vector<Block> blocks = {line(P(0, 0), P(10, 0), 6000),
+                                     line(P(10, 0), P(10, 10), 6000)};
+  auto rounded = [](double bump_at_mm) {
+    // 0.1 mm per cycle: along X to 9.5, a quarter circle of R 0.5 about (9.5, 0.5), along Y.
+    Trajectory tr;
+    std::vector<AxisVec> pts;
+    for (int k = 0; k <= 95; ++k) pts.push_back(P(0.1 * k, 0));
+    const double step = 0.1 / 0.5;  // rad per cycle
+    for (double a = step; a < std::numbers::pi / 2; a += step) {
+      pts.push_back(P(9.5 + 0.5 * std::sin(a), 0.5 - 0.5 * std::cos(a)));
+    }
+    for (int k = 0; k <= 95; ++k) pts.push_back(P(10, 0.5 + 0.1 * k));
+    double extra = 0;
+    for (std::size_t k = 0; k < pts.size(); ++k) {
+      AxisVec p = pts[k];
+      if (p[1] > bump_at_mm) {
+        extra += 0.0001;  // a speed step of 0.1 mm/s per cycle from there on
+        p[1] += extra;
+      }
+      tr.add(static_cast<double>(k) * kTau, 1, p, 6000);
+    }
+    return tr;
+  };
+  Limits lim;
+  lim.max_jerk_mm_s3 = 1000;
+  lim.max_accel_mm_s2 = 1e6;  // the start, the end and the turn are not what this test checks
+  lim.max_feed_mm_min = 1e5;
+  lim.path_tolerance_mm = 0.3;
+  const auto corner = check_trajectory(rounded(100), blocks, lim);
+  // Only the start and the end change the speed along the path.
+  for (const auto& v : corner.violations) {
+    if (v.property == Property::kJerk) {
+      EXPECT_TRUE(v.index < 3u || v.index + 4 > corner.speed_mm_s.size()) << corner.summary();
+    }
+  }
+  // A speed ramp starting on the straight part along Y (at 5 mm) is charged.
+  const auto straight = check_trajectory(rounded(5), blocks, lim);
+  EXPECT_GT(straight.count(Property::kJerk), corner.count(Property::kJerk)) << straight.summary();
+}
+
 TEST(TrajectoryChecker, PerAxisLimits) {
   // A 45° line at 100 mm/s: each axis moves at 70.7 mm/s; the ramp at 1000 mm/s² gives 707
   // per axis. Y limited to 60 mm/s and 600 mm/s².

@@ -392,11 +392,27 @@ CheckReport check_trajectory(const Trajectory& tr, const Path& path, const Limit
       if (la > 0 && aa > la * m1 + eps_a) add(Property::kAxisAccel, k, aa, la, static_cast<int>(i));
     }
   }
+  // Tangential jerk is a property of the speed along the path: a window of samples k−1 … k+2
+  // that turns a corner (a joint with a direction change between its first and last sample, or
+  // a sample off the path: a filter rounding a corner) measures the turn, which the normal and
+  // per-axis acceleration bound, not the speed profile. Such windows are skipped.
+  auto turns_corner = [&](std::size_t k) {
+    if (nseg == 0) return false;
+    for (std::size_t i = k - 1; i <= k + 2; ++i) {
+      if (proj[i].dist > on_path) return true;
+    }
+    for (std::size_t j = proj[k - 1].seg; j < proj[k + 2].seg && j + 1 < nseg; ++j) {
+      if (corner_angle_rad(segs[j], segs[j + 1]) > 1e-9) return true;
+    }
+    return false;
+  };
   for (std::size_t k = 1; k + 2 < n; ++k) {
     const double jt = std::abs(at[k + 1] - at[k]) / tau;
-    rep.max_tangential_jerk_mm_s3 = std::max(rep.max_tangential_jerk_mm_s3, jt);
-    if (lim.check_jerk && lim.max_jerk_mm_s3 > 0 && jt > lim.max_jerk_mm_s3 * m1 + eps_j)
-      add(Property::kJerk, k, jt, lim.max_jerk_mm_s3);
+    if (!turns_corner(k)) {
+      rep.max_tangential_jerk_mm_s3 = std::max(rep.max_tangential_jerk_mm_s3, jt);
+      if (lim.check_jerk && lim.max_jerk_mm_s3 > 0 && jt > lim.max_jerk_mm_s3 * m1 + eps_j)
+        add(Property::kJerk, k, jt, lim.max_jerk_mm_s3);
+    }
     const Vec3 j3 = tr.pos[k + 2].xyz() - 3.0 * tr.pos[k + 1].xyz() + 3.0 * tr.pos[k].xyz() -
                     tr.pos[k - 1].xyz();
     rep.max_resultant_jerk_mm_s3 =

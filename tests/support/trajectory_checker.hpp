@@ -29,7 +29,7 @@
 //     F = programmed feed (rapid rate for G0; override applies to G0 unless configured off,
 //     and never lets G0 exceed the rapid rate), and f[k] = override·correction factor.
 //   Override steps: f[k] is the LARGEST factor among the samples with t ≥ t[k] − ramp
-//   (Limits::ramp_s(), default max(Vfeed, Vrapid)/Amax + 2τ (+ Amax/Jmax)). So an override
+//   (Limits::ramp_s(), default max(Vfeed, Vrapid)/Amax + 2τ (+ 2·Amax/Jmax, + post filter)). So an override
 //   increase raises the limit at once, and after an override DECREASE the old, higher limit stays
 //   in force for one full acc/dec ramp. Feed changes between blocks get no such allowance: the
 //   look-ahead knows them in advance, so the tool must already be at or below the new block's

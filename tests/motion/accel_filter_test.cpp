@@ -1,0 +1,217 @@
+// The acceleration-limited acc/dec type with a filter after it (issue 9; accel_limited.cpp, 8.):
+// the jerk stage (moving average of T2 cycles on the path position) and the post-interpolation
+// filter with its contour tolerance. Everything is measured on the produced positions by the
+// independent checker (tests/support): speed, tangential/normal/per-axis acceleration, tangential
+// jerk, distance to the programmed path, end point.
+#include <gtest/gtest.h>
+#include <rapidcheck.h>
+#include <rapidcheck/gtest.h>
+
+#include <cstdio>
+
+#include "limits.hpp"
+#include "motion_test_util.hpp"
+#include "planner/segment.hpp"
+#include "program_gen_rc.hpp"
+#include "trajectory_checker.hpp"
+
+namespace cncore::motion::test {
+namespace {
+
+RunOpts accel_opts() {
+  RunOpts o;
+  o.kernel.accdec = AccDecType::kAcceleration;
+  o.kernel.check_reference_walk = true;
+  return o;
+}
+
+testing::CheckReport check(const MachineConfig& m, const std::vector<Block>& blocks,
+                           const RunResult& r) {
+  return testing::check_trajectory(r.traj, blocks, testing::limits_from_config(m));
+}
+
+void expect_end(const RunResult& r, const AxisVec& end) {
+  ASSERT_FALSE(r.samples.empty());
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    EXPECT_NEAR(r.samples.back().position[i], end[i], 1e-9) << "axis " << i;
+  }
+  EXPECT_EQ(r.samples.back().feed_mm_min, 0.0);
+}
+
+// Axis limits below the path's Amax on X and Y: lines and arcs get r < 1 of their own, which
+// the jerk stage must carry over the next lag·v (the output averages the accelerations ahead).
+MachineConfig slow_axes_machine() {
+  MachineConfig m = test_machine();
+  m.axes[kX].max_accel_mm_s2 = 1500;
+  m.axes[kY].max_accel_mm_s2 = 800;
+  return m;
+}
+
+// Corners of every kind, arcs both ways, short and long lines, feed changes.
+Prog mixed_program() {
+  Prog p = corner_example();
+  p.line_to(Vec3{0, 40, 0}, 10000);                      // 90°
+  p.line_to(Vec3{30, 45, 0}, 6000);                      // gentle, slower feed
+  p.line_to(Vec3{31, 45.2, 0}, 10000);                   // short
+  p.arc_to(Vec3{41, 45.2, 0}, Vec3{36, 45.2, 0}, 8000);  // half circle
+  p.line_to(Vec3{45, 10, 0}, 10000);                     // sharp, not a reversal
+  p.line_to(Vec3{20, 10, 5}, 10000);                     // into Z
+  for (int i = 0; i < 12; ++i) {                         // zig-zag of 2 mm strokes
+    p.line_to(Vec3{20 + 2.0 * (i + 1), i % 2 == 0 ? 12.0 : 10.0, 5}, 10000);
+  }
+  return p;
+}
+
+TEST(AccelFilter, JerkStageBoundsTheTangentialJerk) {
+  for (double jerk : {20000.0, 100000.0, 1e6}) {
+    for (const MachineConfig& base : {test_machine(), slow_axes_machine()}) {
+      MachineConfig m = base;
+      m.max_jerk_mm_s3 = jerk;
+      for (const Prog& p : {seed_example(), corner_example(), mixed_program()}) {
+        const RunResult r = run(m, p.blocks, accel_opts());
+        const auto rep = check(m, p.blocks, r);
+        EXPECT_TRUE(rep.ok()) << "J " << jerk << ": " << rep.summary();
+        EXPECT_EQ(r.mismatches, 0u);
+        EXPECT_LE(rep.max_tangential_jerk_mm_s3, jerk * 1.005) << "J " << jerk;
+        expect_end(r, p.pos);
+      }
+    }
+  }
+}
+
+// The jerk stage is not free: each speed change takes T2 cycles more. It must cost about that,
+// not more: on the seed's example at most T2·τ per ramp (three ramps) against no jerk stage.
+TEST(AccelFilter, JerkStageCostsAboutOneFilterSpanPerRamp) {
+  MachineConfig m = test_machine();
+  const Prog p = seed_example();
+  const RunResult plain = run(m, p.blocks, accel_opts());
+  m.max_jerk_mm_s3 = 100000;  // T2 = ⌈2·Amax/(Jmax·τ)⌉ = 40 cycles
+  const RunResult jerk = run(m, p.blocks, accel_opts());
+  const double t2_s = 0.040;
+  std::printf("seed example: %.3f s without the jerk stage, %.3f s with J = 1e5 mm/s³\n",
+              plain.time_s(), jerk.time_s());
+  EXPECT_GT(jerk.time_s(), plain.time_s());
+  EXPECT_LE(jerk.time_s(), plain.time_s() + 3 * t2_s + 0.01);
+}
+
+TEST(AccelFilter, PostFilterKeepsTheContourTolerance) {
+  for (double tol : {0.002, 0.01, 0.05}) {
+    MachineConfig m = test_machine();
+    m.post_filter_s = 0.016;
+    m.contour_tolerance_mm = tol;
+    Prog p = seed_example();
+    for (int i = 0; i < 20; ++i) {
+      p.line_to(Vec3{i % 2 == 0 ? 10.0 : 0.0, 20 + 2.0 * (i + 1), 0}, 10000);
+    }
+    p.arc_to(Vec3{0, 70, 0}, Vec3{0, 65, 0}, 10000, {0, 0, -1});
+    const RunResult r = run(m, p.blocks, accel_opts());
+    const auto rep = check(m, p.blocks, r);
+    EXPECT_TRUE(rep.ok()) << "tol " << tol << ": " << rep.summary();
+    EXPECT_LE(rep.max_path_error_mm, tol);
+    EXPECT_GT(rep.max_path_error_mm, 0.1 * tol) << "the corner speed is needlessly low";
+    std::printf("post filter 16 ms, tolerance %.3f mm: contour error %.4f mm, %.3f s\n", tol,
+                rep.max_path_error_mm, r.time_s());
+    expect_end(r, p.pos);
+  }
+}
+
+TEST(AccelFilter, PostFilterExactPathStopsAtCorners) {
+  MachineConfig m = test_machine();
+  m.post_filter_s = 0.016;
+  Prog p;
+  p.line_to(Vec3{20, 0, 0}, 10000, PathMode::kExactPath);
+  p.line_to(Vec3{20, 20, 0}, 10000, PathMode::kExactPath);
+  const RunResult r = run(m, p.blocks, accel_opts());
+  auto lim = testing::limits_from_config(m);
+  lim.path_tolerance_mm = 1e-6;
+  const auto rep = testing::check_trajectory(r.traj, p.blocks, lim);
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+}
+
+TEST(AccelFilter, JerkStageAndPostFilterTogether) {
+  for (double jerk : {0.0, 50000.0}) {
+    for (double post : {0.0, 0.008}) {
+      MachineConfig m = slow_axes_machine();
+      m.max_jerk_mm_s3 = jerk;
+      m.post_filter_s = post;
+      const Prog p = mixed_program();
+      RunOpts o = accel_opts();
+      o.override_steps = {{0.1, 150}, {0.4, 60}, {0.8, 200}, {1.2, 100}};
+      const RunResult r = run(m, p.blocks, o);
+      const auto rep = check(m, p.blocks, r);
+      EXPECT_TRUE(rep.ok()) << "J " << jerk << " post " << post << ": " << rep.summary();
+      EXPECT_EQ(r.mismatches, 0u);
+      expect_end(r, p.pos);
+    }
+  }
+}
+
+bool has_reversal(const MachineConfig& m, const std::vector<Block>& blocks) {
+  const planner::Limits lim = planner::make_limits(m, false);
+  bool have = false;
+  AxisVec end_dir;
+  for (const Block& b : blocks) {
+    if (b.kind != BlockKind::kRapid && b.kind != BlockKind::kLine && b.kind != BlockKind::kArc)
+      continue;
+    const planner::Segment s = planner::make_motion_segment(b, lim);
+    if (s.length_mm <= 0) continue;
+    const AxisVec start_dir = s.start_direction();
+    double dot_se = 0;
+    for (std::size_t i = 0; i < kMaxAxes; ++i) dot_se += start_dir[i] * end_dir[i];
+    if (have && dot_se < -0.999) return true;
+    end_dir = s.end_direction();
+    have = true;
+  }
+  return false;
+}
+
+// Random programs (lines down to 1 µm, arcs, helices, rapids, exact stops, dwells) with random
+// override steps, a jerk stage and a post filter, slow X/Y axes. Blocks always arrive in time
+// (late blocks with a filter: see "Not covered" in accel_limited.cpp, 8.).
+RC_GTEST_PROP(AccelFilter, RandomProgramsKeepEveryLimit, ()) {
+  MachineConfig m = slow_axes_machine();
+  m.max_jerk_mm_s3 = *rc::gen::element(20000.0, 100000.0, 1e6);
+  m.post_filter_s = *rc::gen::element(0.0, 0.0, 0.004, 0.016);
+  m.lookahead_blocks = *rc::gen::element(8, 40, 1000);
+  testing::gen::BlockGenOptions g;
+  g.max_blocks = 14;
+  // With a post filter the positions are off the path by up to the tolerance (0.01 mm), and on
+  // features of that size (a 1 µm G0, a full circle of R 0.1, a helix turn passing its own end
+  // point) the checker's projection onto the path becomes ambiguous: it picks the next segment
+  // or the wrong turn and reports jumps that are not there (the moving-average type fails the
+  // same way). So with the post filter the features are kept well above the tolerance.
+  if (m.post_filter_s > 0) {
+    g.helices = false;
+    g.min_len_mm = 0.5;
+    g.min_radius_mm = 1;
+  }
+  const auto blocks = *testing::gen::blocks(g);
+  // With a post filter, an exact reversal folds the path onto itself: the filtered tool turns
+  // back just before the fold, on both segments at once, and the checker's path-projected speed
+  // (Δs across the joint) sees a jump that is not there (1.62 mm/s measured for 0.02 mm/s of
+  // real motion). Such programs are left out when the post filter is on.
+  if (m.post_filter_s > 0) RC_PRE(!has_reversal(m, blocks));
+  RunOpts o = accel_opts();
+  o.max_cycles = 3'000'000;
+  o.override_steps = *testing::gen::override_steps(2.0);
+  const RunResult r = run(m, blocks, o);
+  // After an override decrease this type decelerates at the segment's own acceleration, on an
+  // arc in the slow Y axis's plane as low as √(1 − 0.95²)·800 = 250 mm/s² (accel_limited.cpp,
+  // 2.): one ramp is then up to Vmax/250 mm/s², plus the filters' spans.
+  auto lim = testing::limits_from_config(m);
+  lim.override_ramp_s = lim.ramp_s() + lim.max_feed_mm_min / 60.0 / 250.0;
+  const auto rep = testing::check_trajectory(r.traj, blocks, lim);
+  if (!rep.ok()) RC_LOG() << rep.summary() << "\n";
+  RC_ASSERT(rep.ok());
+  RC_ASSERT(r.mismatches == 0u);
+  AxisVec end = g.start;
+  for (const Block& b : blocks) {
+    if (b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc)
+      end = b.end;
+  }
+  for (std::size_t i = 0; i < 3; ++i)
+    RC_ASSERT(std::abs(r.samples.back().position[i] - end[i]) <= 1e-9);
+}
+
+}  // namespace
+}  // namespace cncore::motion::test
