@@ -77,6 +77,7 @@ TEST(AccelLimited, SeedAndCornerExamples) {
   const RunResult corner = run_checked(m, corner_example());
   // The moving average needs T = 84 cycles for every speed change; this type |ΔV|/Amax.
   RunOpts ma;
+  ma.kernel.accdec = AccDecType::kMovingAverage;  // whatever the default
   const RunResult seed_ma = run(m, seed_example().blocks, ma);
   EXPECT_LT(seed.time_s(), seed_ma.time_s());
   std::printf("seed example: acceleration %.3f s, moving average %.3f s; corner example %.3f s\n",

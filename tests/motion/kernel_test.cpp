@@ -26,9 +26,12 @@ testing::CheckReport check(const MachineConfig& m, const std::vector<Block>& blo
   return testing::check_trajectory(r.traj, blocks, testing::limits_from_config(m));
 }
 
+// The moving-average type (the seed's), whatever the default acc/dec type: these tests measure
+// its behaviour (test_motion_accel runs the same programs with the acceleration type).
 RunOpts opts(Mode mode) {
   RunOpts o;
   o.kernel.mode = mode;
+  o.kernel.accdec = AccDecType::kMovingAverage;
   return o;
 }
 
@@ -262,7 +265,7 @@ TEST_P(BothModes, OverrideStepsKeepTheLimits) {
 TEST(Kernel, FeedHoldStopsOnThePathAndResumes) {
   const MachineConfig m = test_machine();
   const Prog p = seed_example(10000);
-  RunOpts o;
+  RunOpts o = opts(Mode::kLookahead);
   o.hold_steps = {{0.2, true}, {0.6, false}};
   const RunResult r = run(m, p.blocks, o);
   const auto rep = check(m, p.blocks, r);
@@ -290,7 +293,7 @@ TEST(Kernel, LateBlocksAreTreatedAsStopsAndStillKeepTheLimits) {
     p.line_to(Vec3{20 * std::cos(a), 20 * std::sin(a), 0}, 10000);
   }
   for (std::size_t every : {1u, 3u}) {
-    RunOpts o;
+    RunOpts o = opts(Mode::kLookahead);
     o.feed_every = every;  // one block per cycle: the tail stop is live most of the time
     o.kernel.check_reference_walk = true;
     const RunResult r = run(m, p.blocks, o);
@@ -305,7 +308,7 @@ TEST(Kernel, SmallBufferStillReachesTheEnd) {
   MachineConfig m = test_machine();
   m.lookahead_blocks = 3;
   const Prog p = seed_example();
-  const RunResult r = run(m, p.blocks);
+  const RunResult r = run(m, p.blocks, opts(Mode::kLookahead));
   const auto rep = check(m, p.blocks, r);
   EXPECT_TRUE(rep.ok()) << rep.summary();
   expect_ends(r, AxisVec{}, p.pos);
@@ -368,7 +371,7 @@ TEST(Kernel, ResultantAccelerationBoundOnArcs) {
   p.arc_to(Vec3{20, 20, 0}, Vec3{20, 10, 0}, 10000);              // R 10, tangent entry
   p.arc_to(Vec3{20, 22, 0}, Vec3{20, 21, 0}, 10000, {0, 0, -1});  // R 1, reversing curvature
   p.line_to(Vec3{0, 22, 0}, 10000);
-  RunOpts o;
+  RunOpts o = opts(Mode::kLookahead);
   const RunResult seed_way = run(m, p.blocks, o);
   o.kernel.bound_resultant_accel = true;
   const RunResult bounded = run(m, p.blocks, o);
@@ -394,7 +397,7 @@ TEST(Kernel, PostFilterKeepsTheContourTolerance) {
       p.line_to(Vec3{i % 2 == 0 ? 10.0 : 0.0, 20 + 2.0 * (i + 1), 0}, 10000);
     }
     p.arc_to(Vec3{0, 70, 0}, Vec3{0, 65, 0}, 10000, {0, 0, -1});
-    const RunResult r = run(m, p.blocks);
+    const RunResult r = run(m, p.blocks, opts(Mode::kLookahead));
     const auto rep = check(m, p.blocks, r);
     EXPECT_TRUE(rep.ok()) << "tol " << tol << ": " << rep.summary();
     EXPECT_LE(rep.max_path_error_mm, tol);
@@ -411,7 +414,7 @@ TEST(Kernel, PostFilterExactPathStopsAtCorners) {
   Prog p;
   p.line_to(Vec3{20, 0, 0}, 10000, PathMode::kExactPath);
   p.line_to(Vec3{20, 20, 0}, 10000, PathMode::kExactPath);
-  const RunResult r = run(m, p.blocks);
+  const RunResult r = run(m, p.blocks, opts(Mode::kLookahead));
   auto lim = testing::limits_from_config(m);
   lim.path_tolerance_mm = 1e-6;
   const auto rep = testing::check_trajectory(r.traj, p.blocks, lim);
