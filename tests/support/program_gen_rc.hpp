@@ -46,7 +46,6 @@ struct BlockGenOptions {
   double max_feed_mm_min = 15000;  // above the machine's 10 000: the limit must clip it
   bool arcs = true;
   bool helices = true;
-  bool full_circles = true;
   bool rapids = true;
   bool stops = true;  // exact stops and dwells
   // Travel box the whole path stays inside (the built-in machine's).
@@ -115,7 +114,7 @@ inline rc::Gen<std::vector<Block>> blocks(BlockGenOptions o = {}) {
         const Vec3 nrm = plane_normal(plane, ccw);
         const double r = log_uniform(o.min_radius_mm, o.max_radius_mm, *rc::gen::inRange(0, 1001));
         const double a0 = *rc::gen::inRange(0, 360) * std::numbers::pi / 180;
-        const bool full = o.full_circles && *rc::gen::inRange(0, 8) == 0;
+        const bool full = *rc::gen::inRange(0, 8) == 0;
         const double sweep =
             full ? 2 * std::numbers::pi : *rc::gen::inRange(1, 360) * std::numbers::pi / 180;
         const std::uint32_t turns =

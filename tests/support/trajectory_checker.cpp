@@ -395,13 +395,18 @@ CheckReport check_trajectory(const Trajectory& tr, const Path& path, const Limit
   // Tangential jerk is a property of the speed along the path: a window of samples k−1 … k+2
   // that turns a corner (a joint with a direction change between its first and last sample, or
   // a sample off the path: a filter rounding a corner) measures the turn, which the normal and
-  // per-axis acceleration bound, not the speed profile. Such windows are skipped.
+  // per-axis acceleration bound, not the speed profile. Such windows are skipped. A post filter
+  // of P cycles spreads the turn over P cycles on each side: the window grows by P.
+  const std::size_t post_cycles =
+      lim.post_filter_s > 0 ? static_cast<std::size_t>(std::ceil(lim.post_filter_s / tau)) : 0;
   auto turns_corner = [&](std::size_t k) {
     if (nseg == 0) return false;
     for (std::size_t i = k - 1; i <= k + 2; ++i) {
       if (proj[i].dist > on_path) return true;
     }
-    for (std::size_t j = proj[k - 1].seg; j < proj[k + 2].seg && j + 1 < nseg; ++j) {
+    const std::size_t lo = k - 1 >= post_cycles ? k - 1 - post_cycles : 0;
+    const std::size_t hi = std::min(n - 1, k + 2 + post_cycles);
+    for (std::size_t j = proj[lo].seg; j < proj[hi].seg && j + 1 < nseg; ++j) {
       if (corner_angle_rad(segs[j], segs[j + 1]) > 1e-9) return true;
     }
     return false;
