@@ -80,7 +80,10 @@
 //    increase only raises the limits (the geometric caps and the stops, which keep every braking
 //    distance, are OR-independent); an override decrease lowers the feed limit, and the tool then
 //    decelerates at A_seg until it is below it (u ≥ u_prev − r·A0 for the feed part), which the
-//    spec and the checker allow for one ramp.
+//    spec and the checker allow for one ramp. On an arc whose r was set by the normal
+//    acceleration at its top speed, it decelerates at min(A0, √((0.98·g)² − (u²/ρ)²)) for the
+//    current step u instead (more as u falls; inside the tool's segment, no joint zone within
+//    reach, and not with a filter after this type, whose r carry (8.) assumes r).
 //
 // 6. Late caps. A cap that arrives while the tool is already past its c (the interpreter was
 //    late: until then the window's last end point was a stop) is active at once. The stop the
@@ -163,6 +166,7 @@ using planner::Segment;
 namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kArcNormalShare = 0.95;  // a_n ≤ 0.95·g on arcs where the axes couple
+constexpr double kRecoverShare = 0.98;  // √(a_t² + a_n²) ≤ 0.98·g slowing down on an arc (5.)
 // Joint zones (7.): the speed change allowed at a joint is at least this share of the segments'
 // (below it, the corner's passing speed is lowered instead).
 constexpr double kZoneFloor = 0.25;
@@ -205,6 +209,9 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       head_r_(buffer.capacity(), 1.0),
       tail_mm_(buffer.capacity(), 0.0),
       tail_r_(buffer.capacity(), 1.0),
+      arc_g_(buffer.capacity(), 0.0),
+      arc_rho_(buffer.capacity(), 0.0),
+      lin_r_(buffer.capacity(), 1.0),
       pool_(buffer.capacity() + 1),
       caps_(3 * pool_),
       state_(3 * pool_, State::kEmpty),
@@ -260,6 +267,8 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
                                     : std::abs(delta[i]) / s.length_mm;
     if (d > 1e-12) r = std::min(r, lim_.axis_amax_pc2[i] / (d * a0_));
   }
+  lin_r_[slot] = std::max(r, 1e-6);
+  arc_g_[slot] = 0;
   if (s.arc) {
     // Normal and tangential acceleration share the axes of the arc plane: an axis sees at most
     // √(a_t² + a_n²)·h_i (h_i its share of the plane).
@@ -275,6 +284,8 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
       const double an = std::min(v_top * v_top / s.rho_mm, kArcNormalShare * g);
       vcap = std::min(vcap, std::sqrt(an * s.rho_mm));
       r = std::min(r, std::min(a0_, std::sqrt(std::max(0.0, g * g - an * an))) / a0_);
+      arc_g_[slot] = g;
+      arc_rho_[slot] = s.rho_mm;
     }
   }
   r = std::max(r, 1e-6);
@@ -856,6 +867,7 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
 
   double sigma_p = sigma_total_;
   double r = 1, r_seg = 1;
+  recover_arc_slot_ = kNoSlot;
   if (!buf_.empty() && cur_ < buf_.end_index() && buf_[cur_].kind == ItemKind::kMotion) {
     const Segment& s = buf_[cur_];
     const std::size_t slot = buf_.slot(cur_);
@@ -869,6 +881,9 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     const Rates rates = r_span(pos_mm_, reach);
     r = rates.zones;
     r_seg = rates.plain;
+    if (lag_ == 0 && arc_g_[slot] > 0 && reach < s.end_mm() && rates.zones == ratio_[slot]) {
+      recover_arc_slot_ = slot;
+    }
   }
   // a: the speed change allowed in this cycle; a_seg, without the joint zones: the stop's
   // lattice in real distance near the stop (the zones are in σ, which the stop bound uses).
@@ -911,7 +926,19 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   // step's deceleration: then decelerate at a until the tool is within it again.
   if (in.or_ratio < prev_or_) feed_recover_ = true;
   prev_or_ = in.or_ratio;
-  const double feed = feed_recover_ ? std::max(step_ - a, caps.feed) : caps.feed;
+  // On an arc r was fixed for its top speed, where a_n = v²/ρ leaves √(g² − a_n²) for the
+  // tangent: slowing down for a lower override, the current step's a_n leaves more (inside the
+  // tool's segment, no joint zone in reach, no filter after this type: 8. carries r).
+  double a_recover = a;
+  if (feed_recover_ && recover_arc_slot_ != kNoSlot) {
+    const std::size_t slot = recover_arc_slot_;
+    const double an = step_ * step_ / arc_rho_[slot];
+    // 2 % of g kept for the chords' discrete normal acceleration (the top-speed rule keeps 5 %).
+    const double g = kRecoverShare * arc_g_[slot];
+    const double at = std::sqrt(std::max(0.0, g * g - an * an));
+    a_recover = std::max(a, std::min({a0_, lin_r_[slot] * a0_, at}));
+  }
+  const double feed = feed_recover_ ? std::max(step_ - a_recover, caps.feed) : caps.feed;
   u = std::min({u, feed, caps.geo, stop_limit, to_stop});
   u = std::max(0.0, u);
   if (u <= caps.feed) feed_recover_ = false;

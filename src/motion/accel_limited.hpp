@@ -113,6 +113,12 @@ class AccelLimitedAccDec final : public AccDec {
   // Per buffer slot: the joint zones (see 7.): r ≤ head_r_ on the first head_mm_, ≤ tail_r_ on
   // the last tail_mm_ of the segment.
   std::vector<double> len_mm_, head_mm_, head_r_, tail_mm_, tail_r_;
+  // Per buffer slot, arcs whose plane axes share normal and tangential acceleration: the axis
+  // bound g (0: none), the radius of curvature, and the ratio of the linear axis shares alone —
+  // an override decrease decelerates with what the current speed leaves (5.).
+  std::vector<double> arc_g_, arc_rho_, lin_r_;
+  static constexpr std::size_t kNoSlot = ~std::size_t{0};
+  std::size_t recover_arc_slot_ = kNoSlot;  // this cycle's arc for a_recover (step())
   // Passing speed the joint zones of the joint after item zone_index_a_ were computed for (a
   // joint cap when lower than the segments' caps; see 7.).
   double zone_vg_ = 0;

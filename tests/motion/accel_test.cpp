@@ -355,6 +355,38 @@ TEST(AccelLimited, FasterThanStopModeAndMovingAverage) {
 }
 
 // P5 on random programs with random override steps: the generator of kernel_test.cpp, this type.
+// An override decrease on an arc run at its top speed, where the normal acceleration takes
+// 0.95 of the slow Y axis's budget g = 800 mm/s²: the tangent has √(g² − a_n²) = 250 mm/s² at
+// first, and slowing down it may use √((0.98·g)² − (v²/ρ)²) once that is more. Integrating
+// dv/dt = −max(250, √(784² − (v²/ρ)²)) from 123 mm/s (R 20: a_n = 760) down to the new limit
+// 16.7 mm/s takes 0.168 s; at a fixed 250 mm/s² it would take 0.43 s. Measured from the
+// positions: below the new limit within 0.168 s + 3 cycles.
+TEST(AccelLimited, OverrideDecreaseOnAFastArcDeceleratesWithWhatTheSpeedLeaves) {
+  MachineConfig m = test_machine();
+  m.axes[kY].max_accel_mm_s2 = 800;
+  Prog p;
+  p.arc_to(Vec3{40, 0, 0}, Vec3{20, 0, 0}, 10000);  // half circle R 20 in XY
+  RunOpts o = accel_opts();
+  o.override_steps = {{0.5, 10}};
+  const RunResult r = run(m, p.blocks, o);
+  auto lim = testing::limits_from_config(m);
+  lim.override_ramp_s = 0.168 + 0.003;
+  const auto rep = testing::check_trajectory(r.traj, p.blocks, lim);
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+  double top = 0, below_at = -1;
+  for (std::size_t k = 1; k < r.samples.size(); ++k) {
+    const double v =
+        norm(r.samples[k].position.xyz() - r.samples[k - 1].position.xyz()) / m.period_s;
+    if (r.samples[k].t_s < 0.5) top = std::max(top, v);
+    if (r.samples[k].t_s >= 0.5 && below_at < 0 && v <= 10000.0 / 60 * 0.1 * 1.005) {
+      below_at = r.samples[k].t_s;
+    }
+  }
+  EXPECT_NEAR(top, std::sqrt(0.95 * 800 * 20), 0.5);  // the arc's top speed, a_n = 0.95·g
+  EXPECT_GT(below_at, 0.5);
+  EXPECT_LE(below_at - 0.5, 0.168 + 0.003);
+}
+
 RC_GTEST_PROP(AccelLimited, RandomProgramsWithOverrideSteps, ()) {
   MachineConfig m = test_machine();
   m.lookahead_blocks = *rc::gen::inRange(4, 40);
