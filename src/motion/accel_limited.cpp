@@ -867,7 +867,8 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
 
   double sigma_p = sigma_total_;
   double r = 1, r_seg = 1;
-  recover_arc_slot_ = kNoSlot;
+  // The tool's arc whose deceleration may follow its speed (5.); none: capacity.
+  std::size_t recover_arc = buf_.capacity();
   if (!buf_.empty() && cur_ < buf_.end_index() && buf_[cur_].kind == ItemKind::kMotion) {
     const Segment& s = buf_[cur_];
     const std::size_t slot = buf_.slot(cur_);
@@ -882,7 +883,7 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     r = rates.zones;
     r_seg = rates.plain;
     if (lag_ == 0 && arc_g_[slot] > 0 && reach < s.end_mm() && rates.zones == ratio_[slot]) {
-      recover_arc_slot_ = slot;
+      recover_arc = slot;
     }
   }
   // a: the speed change allowed in this cycle; a_seg, without the joint zones: the stop's
@@ -930,8 +931,8 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   // tangent: slowing down for a lower override, the current step's a_n leaves more (inside the
   // tool's segment, no joint zone in reach, no filter after this type: 8. carries r).
   double a_recover = a;
-  if (feed_recover_ && recover_arc_slot_ != kNoSlot) {
-    const std::size_t slot = recover_arc_slot_;
+  if (feed_recover_ && recover_arc < buf_.capacity()) {
+    const std::size_t slot = recover_arc;
     const double an = step_ * step_ / arc_rho_[slot];
     // 2 % of g kept for the chords' discrete normal acceleration (the top-speed rule keeps 5 %).
     const double g = kRecoverShare * arc_g_[slot];

@@ -117,8 +117,6 @@ class AccelLimitedAccDec final : public AccDec {
   // bound g (0: none), the radius of curvature, and the ratio of the linear axis shares alone —
   // an override decrease decelerates with what the current speed leaves (5.).
   std::vector<double> arc_g_, arc_rho_, lin_r_;
-  static constexpr std::size_t kNoSlot = ~std::size_t{0};
-  std::size_t recover_arc_slot_ = kNoSlot;  // this cycle's arc for a_recover (step())
   // Passing speed the joint zones of the joint after item zone_index_a_ were computed for (a
   // joint cap when lower than the segments' caps; see 7.).
   double zone_vg_ = 0;

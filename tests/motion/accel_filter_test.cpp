@@ -98,11 +98,7 @@ TEST(AccelFilter, PostFilterKeepsTheContourTolerance) {
     MachineConfig m = test_machine();
     m.post_filter_s = 0.016;
     m.contour_tolerance_mm = tol;
-    Prog p = seed_example();
-    for (int i = 0; i < 20; ++i) {
-      p.line_to(Vec3{i % 2 == 0 ? 10.0 : 0.0, 20 + 2.0 * (i + 1), 0}, 10000);
-    }
-    p.arc_to(Vec3{0, 70, 0}, Vec3{0, 65, 0}, 10000, {0, 0, -1});
+    const Prog p = contour_example();
     const RunResult r = run(m, p.blocks, accel_opts());
     const auto rep = check(m, p.blocks, r);
     EXPECT_TRUE(rep.ok()) << "tol " << tol << ": " << rep.summary();

@@ -112,6 +112,17 @@ inline Prog corner_example(double feed = 10000) {
   return p;
 }
 
+// The seed's example, a zig-zag of 2 mm strokes and a half circle: the post filter's contour
+// tolerance tests (corners of every sharpness, arcs).
+inline Prog contour_example() {
+  Prog p = seed_example();
+  for (int i = 0; i < 20; ++i) {
+    p.line_to(Vec3{i % 2 == 0 ? 10.0 : 0.0, 20 + 2.0 * (i + 1), 0}, 10000);
+  }
+  p.arc_to(Vec3{0, 70, 0}, Vec3{0, 65, 0}, 10000, {0, 0, -1});
+  return p;
+}
+
 struct RunResult {
   std::vector<Sample> samples;
   testing::Trajectory traj;

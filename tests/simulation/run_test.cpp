@@ -15,6 +15,7 @@
 #include "core/error.hpp"
 #include "io/summary.hpp"
 #include "io/trajectory_csv.hpp"
+#include "recorder.hpp"
 
 // Under AddressSanitizer malloc is ASan's own allocator and glibc's mallinfo2 sees none of it:
 // the heap in use is then read from the sanitizer's allocator statistics.
@@ -33,18 +34,7 @@ extern "C" std::size_t __sanitizer_get_current_allocated_bytes();
 namespace cncore::sim {
 namespace {
 
-struct Recorder : SampleObserver {
-  std::vector<motion::Sample> samples;
-  std::vector<Block> blocks;
-  std::vector<std::size_t> samples_at_block;  // samples seen when each block was announced
-  bool finished = false;
-  void on_block(const Block& b) override {
-    blocks.push_back(b);
-    samples_at_block.push_back(samples.size());
-  }
-  void on_sample(const motion::Sample& s) override { samples.push_back(s); }
-  void on_finish() override { finished = true; }
-};
+using test::Recorder;
 
 std::string program_file(const std::string& name, const std::string& text) {
   const auto path = std::filesystem::path(CNCORE_TEST_TMP_DIR) / name;

@@ -17,6 +17,7 @@
 
 #include "core/error.hpp"
 #include "program_gen.hpp"
+#include "recorder.hpp"
 #include "simulation/run.hpp"
 
 namespace cncore::sim {
@@ -24,18 +25,7 @@ namespace {
 
 namespace gen = testing::gen;
 
-struct Recorder : SampleObserver {
-  std::vector<motion::Sample> samples;
-  std::vector<Block> blocks;
-  std::vector<std::size_t> samples_at_block;
-  bool finished = false;
-  void on_block(const Block& b) override {
-    blocks.push_back(b);
-    samples_at_block.push_back(samples.size());
-  }
-  void on_sample(const motion::Sample& s) override { samples.push_back(s); }
-  void on_finish() override { finished = true; }
-};
+using test::Recorder;
 
 struct Outcome {
   Recorder rec;

@@ -29,11 +29,11 @@
 //     F = programmed feed (rapid rate for G0; override applies to G0 unless configured off,
 //     and never lets G0 exceed the rapid rate), and f[k] = override·correction factor.
 //   Override steps: f[k] is the LARGEST factor among the samples with t ≥ t[k] − ramp
-//   (Limits::ramp_s(), default max(Vfeed, Vrapid)/Amax + 2τ (+ 2·Amax/Jmax, + post filter)). So an override
-//   increase raises the limit at once, and after an override DECREASE the old, higher limit stays
-//   in force for one full acc/dec ramp. Feed changes between blocks get no such allowance: the
-//   look-ahead knows them in advance, so the tool must already be at or below the new block's
-//   feed when it enters that block (the limit of the segment where sample k lies).
+//   (Limits::ramp_s(), default max(Vfeed, Vrapid)/Amax + 2τ (+ 2·Amax/Jmax, + post filter)). So an
+//   override increase raises the limit at once, and after an override DECREASE the old, higher
+//   limit stays in force for one full acc/dec ramp. Feed changes between blocks get no such
+//   allowance: the look-ahead knows them in advance, so the tool must already be at or below the
+//   new block's feed when it enters that block (the limit of the segment where sample k lies).
 // - P2 joints: the cycle whose end sample reaches or passes a joint (first sample at or beyond
 //   it) has v ≤ Vg = min(Vb[a], Amax·τ/(2 sin(θ/2)), Vb[b]), Vb = min(Vkind, √(R·Amax)).
 // - P2 axes: per-axis speed ≤ axis limit.
