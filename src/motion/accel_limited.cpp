@@ -705,27 +705,50 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   const std::size_t sa = buf_.slot(index_a);
   const AxisVec e = a.end_direction(), s = b.start_direction();
   const double r_ab = std::min(ratio_[sa], ratio_[slot_b]);
+  // A pair of steps around the joint changes speed by up to the r of either side: an increase
+  // by the r where step 2 goes (all in b when the sample is on the joint), a decrease by the r
+  // of step 1 (all in a). So the larger of both must fit in the other's direction too.
+  const double r_hi = std::max(ratio_[sa], ratio_[slot_b]);
   const double around = std::min(vcap_[sa], vcap_[slot_b]);
   const double corner = planner::joint_speed_pc(a, b, lim_, false);
   const double v0 = std::min(around, corner);
-  // Headroom per axis left by the turn at v0 (7.): with both steps ≤ V and |u2 − u1| ≤ D the
-  // worst second differences are V·(S_i − E_i) − D·S_i and V·(S_i − E_i) + D·E_i.
+  // Arcs next to the joint: a step of length u on an arc of curvature κ leaves its tangent's
+  // line by R(1 − cos φ) ≤ u²κ/2 along the normal N (φ = uκ) and falls short along it by
+  // u − R sin φ ≤ u³κ²/6; N turns by ≤ uκ over the step. Per axis ≤ (u²κ/2)(|N_i| + uκ·h_i)
+  // + u³κ²/6 (h_i: the axis' share of the arc plane), from each side (7.).
+  auto sag = [&](const Segment& x, double phi, double v, std::size_t i) {
+    if (!x.arc || i >= 3 || x.rho_mm <= 0) return 0.0;
+    const double k = 1.0 / x.rho_mm;
+    const Vec3 nrm = std::cos(phi) * x.e1 + std::sin(phi) * x.e2;
+    const double h = std::hypot(component(x.e1, i), component(x.e2, i));
+    return 0.5 * v * v * k * (std::abs(component(nrm, i)) + v * k * h) + v * v * v * k * k / 6.0;
+  };
+  // Headroom per axis left by the turn at speed v (7.): with both steps ≤ V and |u2 − u1| ≤ D
+  // the worst second differences are V·(S_i − E_i) − D·S_i, V·(S_i − E_i) + D·E_i, D·S_i and
+  // D·E_i, each plus the arcs' sag; the largest D meeting all (< 0: the turn alone is too much).
   auto d_max = [&](double v) {
-    double d = r_ab * a0_;
+    double d = r_hi * a0_;
     for (std::size_t i = 0; i < kMaxAxes; ++i) {
       if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
-      const double ai = lim_.axis_amax_pc2[i], t = v * (s[i] - e[i]);
-      if (std::abs(s[i]) > 1e-12) d = std::min(d, (ai + (s[i] > 0 ? t : -t)) / std::abs(s[i]));
-      if (std::abs(e[i]) > 1e-12) d = std::min(d, (ai - (e[i] > 0 ? t : -t)) / std::abs(e[i]));
+      const double ai = lim_.axis_amax_pc2[i] - sag(a, a.sweep_rad, v, i) - sag(b, 0.0, v, i);
+      const double t = v * (s[i] - e[i]);
+      if (std::abs(t) > ai) return -1.0;
+      if (std::abs(s[i]) > 1e-12) {
+        d = std::min(d, std::min(ai, ai + (s[i] > 0 ? t : -t)) / std::abs(s[i]));
+      }
+      if (std::abs(e[i]) > 1e-12) {
+        d = std::min(d, std::min(ai, ai - (e[i] > 0 ? t : -t)) / std::abs(e[i]));
+      }
     }
-    return std::max(0.0, d);
+    return d;
   };
   double d = d_max(v0);
   double vj = v0;
   const double floor = kZoneFloor * r_ab * a0_;
   if (d < floor) {
-    // Too little left: the corner is passed slower instead, so that Δu ≤ floor fits:
-    // |V·Δ_i − F·S_i| ≤ a_i and |V·Δ_i + F·E_i| ≤ a_i (Δ = S − E, F = floor; true at V = 0).
+    // Too little left: the corner is passed slower instead, so that Δu ≤ floor fits. Without
+    // the sag the bound is linear in V: |V·Δ_i − F·S_i| ≤ a_i and |V·Δ_i + F·E_i| ≤ a_i
+    // (Δ = S − E, F = floor; true at V = 0); the sag, growing with V, is then met by bisection.
     d = floor;
     for (std::size_t i = 0; i < kMaxAxes; ++i) {
       if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
@@ -736,12 +759,17 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
       vj = std::min(vj, (ai - d * e[i] * sg) / std::abs(delta));
     }
     vj = std::max(vj, 0.0);
+    if (d_max(vj) < floor) {
+      double lo = 0, hi = vj;  // d_max(0) ≥ floor: r_ab·A0·|S_i|, r_ab·A0·|E_i| ≤ a_i
+      for (int it = 0; it < 40; ++it) (d_max(0.5 * (lo + hi)) >= floor ? lo : hi) = 0.5 * (lo + hi);
+      vj = lo;
+    }
   }
   zone_vg_ = vj;
   zone_joint_pc_ = corner;
   zone_index_a_ = index_a;
   const double rj = std::max(d / a0_, 1e-6);
-  if (rj >= r_ab) return;  // the segments' own r already fits
+  if (rj >= r_hi) return;  // the segments' own r already fits
   // Every step within V of the joint is ≤ V: the joint cap's Vg when there is one, else the
   // segments' caps.
   const double v = vj < 0.999 * around ? vj : around;

@@ -7,7 +7,9 @@
 #include <rapidcheck.h>
 #include <rapidcheck/gtest.h>
 
+#include <cmath>
 #include <cstdio>
+#include <numbers>
 
 #include "limits.hpp"
 #include "motion_test_util.hpp"
@@ -151,7 +153,7 @@ TEST(AccelFilter, JerkStageAndPostFilterTogether) {
 // error" for a tool within 0.001 mm). The post filter is covered by the programs above.
 RC_GTEST_PROP(AccelFilter, RandomProgramsKeepEveryLimit, ()) {
   MachineConfig m = slow_axes_machine();
-  m.max_jerk_mm_s3 = *rc::gen::element(20000.0, 100000.0, 1e6);
+  m.max_jerk_mm_s3 = *rc::gen::element(0.0, 20000.0, 100000.0, 1e6);
   m.lookahead_blocks = *rc::gen::element(8, 40, 1000);
   testing::gen::BlockGenOptions g;
   g.max_blocks = 14;
@@ -176,6 +178,59 @@ RC_GTEST_PROP(AccelFilter, RandomProgramsKeepEveryLimit, ()) {
   }
   for (std::size_t i = 0; i < 3; ++i)
     RC_ASSERT(std::abs(r.samples.back().position[i] - end[i]) <= 1e-9);
+}
+
+// Arcs tangent to lines, both ways, in every direction of the plane, with axis limits at and
+// below Amax. At the joint a pair of steps carries the speed change of either side plus half
+// the arc's sag (7.): before the sag and the larger side's r were counted, the line after a
+// fast R 0.5–2 arc saw up to 1 742 mm/s² on a 1 500 mm/s² axis.
+TEST(AccelFilter, TangentArcLineJointsKeepEveryAxisLimit) {
+  for (double axis_mm_s2 : {2000.0, 1500.0}) {
+    MachineConfig m = test_machine();
+    for (std::size_t i = 0; i < 3; ++i) m.axes[i].max_accel_mm_s2 = axis_mm_s2;
+    for (double radius : {0.5, 2.0, 20.0}) {
+      for (double deg = 0; deg < 360; deg += 30) {
+        const double th = deg * std::numbers::pi / 180;
+        const Vec3 dir{std::cos(th), std::sin(th), 0};
+        const Vec3 left{-dir.y, dir.x, 0};  // the centre side of a counter-clockwise arc
+        // A quarter circle ending at the origin with tangent `dir`, the line along it, and a
+        // half circle tangent to the line's end.
+        const Vec3 c = radius * left;
+        const Vec3 line_end = 30.0 * dir;
+        Prog p;
+        p.line_to(c - radius * dir, 10000);
+        p.arc_to(Vec3{0, 0, 0}, c, 10000);
+        p.line_to(line_end, 10000);
+        p.arc_to(line_end + 2.0 * radius * left, line_end + radius * left, 10000);
+        const RunResult r = run(m, p.blocks, accel_opts());
+        const auto rep = check(m, p.blocks, r);
+        EXPECT_TRUE(rep.ok()) << "axes " << axis_mm_s2 << " R " << radius << " at " << deg
+                              << " deg: " << rep.summary();
+        expect_end(r, p.pos);
+      }
+    }
+  }
+}
+
+// The seed RapidCheck found (no jerk stage, slow Y): a 0.1 mm arc into a rapid along −Y at a
+// 4° corner; the rapid's r (Y alone, 800/2000) plus the turn gave Y 807.5 > 800 mm/s².
+TEST(AccelFilter, SmallArcIntoARapidAtAGentleCornerKeepsTheSlowAxis) {
+  MachineConfig m = slow_axes_machine();
+  m.lookahead_blocks = 40;
+  Prog p;
+  for (int i = 1; i <= 3; ++i) {
+    p.rapid_to(Vec3{-0.001 * i, 0, 0});
+    p.blocks.back().path_mode = PathMode::kExactStop;
+  }
+  p.arc_to(Vec3{-0.081965235944206516, -0.090839112698968022, 0},
+           Vec3{0.017791169081775915, -0.09781476007338058, 0}, 600);
+  p.rapid_to(Vec3{-0.081965235944206516, -0.10188425564723209, 0});
+  p.blocks.back().path_mode = PathMode::kExactStop;
+  const RunResult r = run(m, p.blocks, accel_opts());
+  const auto rep = check(m, p.blocks, r);
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+  EXPECT_LE(rep.max_axis_accel_mm_s2[1], 800 * 1.005);
+  expect_end(r, p.pos);
 }
 
 }  // namespace
