@@ -537,7 +537,7 @@ std::string machine_config_to_toml(const MachineConfig& c) {
       "# Vb = min(Vmax, sqrt(R·Amax)); a corner turning by θ at Amax·τ / (2·sin(θ/2)).\n",
       t_s * 1000, t_cycles, g0_mm_min);
   line("max_jerk_mm_s3 = " + num(c.max_jerk_mm_s3),
-       "Jmax, mm/s³; 0 = no jerk stage, else a second filter T2 = Amax / Jmax");
+       "Jmax, mm/s³; 0 = no jerk stage, else a second filter of T2 = 2·Amax/Jmax");
   line("contour_tolerance_mm = " + num(c.contour_tolerance_mm),
        "largest allowed deviation from the path (corner rounding), mm (> 0)");
   line("post_filter_s = " + num(c.post_filter_s),

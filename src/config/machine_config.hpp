@@ -68,11 +68,11 @@ struct MachineConfig {
   std::string name = "built-in 3-axis mill";
 
   // [motion]
-  double period_s = 0.001;                 // interpolation period τ
-  double max_feed_mm_min = 10000;          // Vmax for feed moves
-  double rapid_mm_min = 15000;             // G0 rate
-  double max_accel_mm_s2 = 2000;           // Amax, tangential and normal
-  double max_jerk_mm_s3 = 0;               // 0: no jerk stage; else T2 = Amax / Jmax
+  double period_s = 0.001;         // interpolation period τ
+  double max_feed_mm_min = 10000;  // Vmax for feed moves
+  double rapid_mm_min = 15000;     // G0 rate
+  double max_accel_mm_s2 = 2000;   // Amax, tangential and normal
+  double max_jerk_mm_s3 = 0;       // 0: no jerk stage; else T2 = ⌈2·Amax/(Jmax·τ)⌉ cycles
   double contour_tolerance_mm = 0.01;      // corner rounding of the post-interpolation filter
   double post_filter_s = 0;                // per-axis post-interpolation moving average; 0: off
   std::uint32_t lookahead_blocks = 10000;  // capacity of the execution-data buffer

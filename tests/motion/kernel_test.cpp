@@ -334,7 +334,7 @@ TEST_P(BothModes, PerAxisLimitsDecide) {
 
 TEST_P(BothModes, JerkStageBoundsTheJerk) {
   MachineConfig m = test_machine();
-  m.max_jerk_mm_s3 = 100000;  // T2 = Amax/(Jmax·τ) = 20 cycles
+  m.max_jerk_mm_s3 = 100000;  // T2 = ⌈2·Amax/(Jmax·τ)⌉ = 40 cycles
   const Prog p = seed_example();
   const RunResult r = run(m, p.blocks, opts(GetParam()));
   const auto rep = check(m, p.blocks, r);
