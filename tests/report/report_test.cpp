@@ -31,12 +31,14 @@ struct Run {
   SummaryObserver summary;
 };
 
-std::unique_ptr<Run> run(const fs::path& program, double override_pct = 100) {
+std::unique_ptr<Run> run(const fs::path& program, double override_pct = 100,
+                         motion::AccDecType accdec = motion::KernelOptions{}.accdec) {
   const MachineConfig m = default_machine_config();
   auto r = std::unique_ptr<Run>(
       new Run{ReportObserver(m, "lookahead"), SummaryObserver(m, "lookahead")});
   sim::RunOptions o;
   o.kernel.override_pct = override_pct;
+  o.kernel.accdec = accdec;
   sim::run_program(program.string(), m, o, {&r->report, &r->summary});
   return r;
 }
@@ -93,18 +95,36 @@ TEST(ReportObserver, BucketsKeepTheExtremesAndMemoryIsFlat) {
 }
 
 TEST(ReportObserver, CornerAndEndOfProgram) {
-  // Lines 2-4: a square's three sides at F6000; 90° corners between them.
-  const auto r = run(write_program("corner.ngc", "G21 G90 G17\nG1 X50 F6000\nG1 Y50\nG1 X0\nM2\n"));
-  const ReportSlowSpot* s3 = spot(r->report, 3);
-  ASSERT_NE(s3, nullptr);
-  EXPECT_NE(s3->why.find("corner 90° from the previous line"), std::string::npos) << s3->why;
-  const ReportSlowSpot* s4 = spot(r->report, 4);
-  ASSERT_NE(s4, nullptr);
-  EXPECT_NE(s4->why.find("stop at the end of the program"), std::string::npos) << s4->why;
-  EXPECT_NEAR(s4->min_speed_mm_min, 0, 1);
-  EXPECT_DOUBLE_EQ(s4->target_mm_min, 6000);
-  // Time lost cannot exceed the time spent on the line.
-  for (const ReportSlowSpot& s : r->report.slowest()) EXPECT_LE(s.lost_s, s.time_s + 1e-12);
+  // Lines 2-4: a square's three sides at F6000; 90° corners between them. Both acc/dec types:
+  // the moving average stops at the corners and creeps into the end point, the acceleration
+  // type passes the corners at Vg and lands on the end point with one step ≤ Amax·τ².
+  const fs::path program =
+      write_program("corner.ngc", "G21 G90 G17\nG1 X50 F6000\nG1 Y50\nG1 X0\nM2\n");
+  const MachineConfig m = default_machine_config();
+  // Standstill in cycles: the last step before rest is at most what one cycle at Amax takes
+  // away, Amax·τ² (2 µm, i.e. 120 mm/min, on the built-in machine).
+  const double stop_step_mm = m.max_accel_mm_s2 * m.period_s * m.period_s;
+  for (const motion::AccDecType accdec :
+       {motion::AccDecType::kMovingAverage, motion::AccDecType::kAcceleration}) {
+    SCOPED_TRACE(accdec == motion::AccDecType::kAcceleration ? "acceleration" : "moving_average");
+    const auto r = run(program, 100, accdec);
+    const ReportSlowSpot* s3 = spot(r->report, 3);
+    ASSERT_NE(s3, nullptr);
+    EXPECT_NE(s3->why.find("corner 90° from the previous line"), std::string::npos) << s3->why;
+    const ReportSlowSpot* s4 = spot(r->report, 4);
+    ASSERT_NE(s4, nullptr);
+    EXPECT_NE(s4->why.find("stop at the end of the program"), std::string::npos) << s4->why;
+    // The slowest cycle of line 4 is at a standstill at one of its ends: the end point X 0 Y 50
+    // (the acceleration type lands there with a step ≤ Amax·τ²), or its start X 50 Y 50
+    // where the moving average stops for the corner — not somewhere along the line.
+    EXPECT_GE(s4->min_speed_mm_min, 0);
+    EXPECT_LE(s4->min_speed_mm_min, stop_step_mm / m.period_s * 60);
+    EXPECT_NEAR(s4->y_mm, 50, stop_step_mm);
+    EXPECT_LE(std::min(std::fabs(s4->x_mm), std::fabs(s4->x_mm - 50)), stop_step_mm) << s4->x_mm;
+    EXPECT_DOUBLE_EQ(s4->target_mm_min, 6000);
+    // Time lost cannot exceed the time spent on the line.
+    for (const ReportSlowSpot& s : r->report.slowest()) EXPECT_LE(s.lost_s, s.time_s + 1e-12);
+  }
 }
 
 TEST(ReportObserver, SmallArcIsLimitedByNormalAcceleration) {

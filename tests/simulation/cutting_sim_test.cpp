@@ -5,9 +5,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <string>
@@ -134,25 +136,58 @@ TEST(CuttingSim, PocketMrrRisesInFullWidthCutsAndFallsInFinishingPasses) {
   EXPECT_NEAR(cut.stats().removed_mm3, 60.0 * 60 * 20 - cut.map().volume_mm3(), 1e-3);
 }
 
+// How much shallower than programmed a plunge that reverses (G1 Z−d, then G0 Z up) may cut,
+// from the machine limits. The moving average stops at the bottom: 0. The acceleration type
+// passes the reversal at its corner speed Vg = min(Amax, a_z)·τ²/2 per cycle
+// (planner::turn_speed_pc with |S − E| = 2); the one step that crosses the bottom is ≤ Vg, its
+// samples lie d1 above the bottom on the way down and d2 on the way up (d1 + d2 ≤ Vg), and the
+// simulator sweeps the chord between them, which reaches min(d1, d2) ≤ Vg/2 above the bottom.
+// Never deeper than programmed, with either type.
+double reversal_shortfall_mm(const MachineConfig& m) {
+  double a_mm_s2 = m.max_accel_mm_s2;
+  if (m.axes[kZ].enabled && m.axes[kZ].max_accel_mm_s2 > 0) {
+    a_mm_s2 = std::min(a_mm_s2, m.axes[kZ].max_accel_mm_s2);
+  }
+  return a_mm_s2 * m.period_s * m.period_s / 4;
+}
+
 TEST(CuttingSim, ToolChangeSelectsTheShapeFromTheTable) {
   const MachineConfig m = machine();
   // T1 (flat Ø10) plunges 2 mm at X −15, then T2 (ball Ø10) plunges 2 mm at X 15.
   const std::string p = program_file("tools.ngc",
                                      "G21 G90\nT1 M6\nG0 X-15 Y0 Z5\nG1 Z-2 F300\nG0 Z5\n"
                                      "T2 M6\nG0 X15 Y0 Z5\nG1 Z-2 F300\nG0 Z5\nM30\n");
-  CuttingSimulator cut(m, p);
-  sim::run_program(p, m, {}, {&cut});
-  const HeightMap& h = cut.map();
-  const auto z = [&](double x, double y) {
-    return h.at(static_cast<std::size_t>((x + 30) / 0.1), static_cast<std::size_t>((y + 30) / 0.1));
-  };
-  // Flat: −2 everywhere within R (cell centre 4.05 mm away is still inside).
-  EXPECT_FLOAT_EQ(z(-15 + 4.0, 0.0), -2.0f);
-  // Ball: −2 + R − √(R² − r²) at the cell centre (x 18.05, y 0.05).
-  const double r = std::hypot(18.05 - 15, 0.05);
-  EXPECT_NEAR(z(18.0, 0.0), -2 + 5 - std::sqrt(25 - r * r), 1e-5);
-  EXPECT_EQ(cut.tool().number, 2u);
-  EXPECT_EQ(cut.stats().tool_changes, 1u);  // T1 was already in the spindle
+  // Heights are floats: one ulp for 2 ≤ |z| < 4 is 2.4e-7 mm (rounding: half of it).
+  const double ulp = 2 * static_cast<double>(std::numeric_limits<float>::epsilon());
+  const double shortfall = reversal_shortfall_mm(m);  // 0.5 µm on this machine
+  for (const motion::AccDecType accdec :
+       {motion::AccDecType::kMovingAverage, motion::AccDecType::kAcceleration}) {
+    SCOPED_TRACE(accdec == motion::AccDecType::kAcceleration ? "acceleration" : "moving_average");
+    CuttingSimulator cut(m, p);
+    sim::RunOptions o;
+    o.kernel.accdec = accdec;
+    sim::run_program(p, m, o, {&cut});
+    const HeightMap& h = cut.map();
+    const auto z = [&](double x, double y) {
+      return static_cast<double>(
+          h.at(static_cast<std::size_t>((x + 30) / 0.1), static_cast<std::size_t>((y + 30) / 0.1)));
+    };
+    // Each plunge reaches −2: at most `shortfall` above it, never below.
+    const double flat_bottom = z(-15, 0), ball_bottom = z(15, 0);
+    EXPECT_GE(flat_bottom, -2 - ulp);
+    EXPECT_LE(flat_bottom, -2 + shortfall + ulp);
+    // Flat: the same height everywhere within R (cell centre 4.05 mm away is still inside).
+    EXPECT_NEAR(z(-15 + 4.0, 0.0), flat_bottom, ulp);
+    // Ball: R − √(R² − r²) above the tip at a cell centre r from the axis. The shape is exact
+    // whatever depth the plunge reached (every cell's lowest point is on the same chord).
+    const auto sag = [](double r) { return 5 - std::sqrt(25 - r * r); };
+    const double r = std::hypot(18.05 - 15, 0.05), r0 = std::hypot(0.05, 0.05);
+    EXPECT_NEAR(z(18.0, 0.0) - ball_bottom, sag(r) - sag(r0), 2 * ulp);
+    EXPECT_GE(ball_bottom, -2 + sag(r0) - ulp);
+    EXPECT_LE(ball_bottom, -2 + sag(r0) + shortfall + ulp);
+    EXPECT_EQ(cut.tool().number, 2u);
+    EXPECT_EQ(cut.stats().tool_changes, 1u);  // T1 was already in the spindle
+  }
 }
 
 TEST(CuttingSim, ALoadSourceForAdaptiveFeed) {
