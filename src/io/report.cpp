@@ -360,8 +360,10 @@ void ReportObserver::close_group() {
       !pending_.empty() && pending_.front().line == g.line ? &pending_.front() : nullptr;
   const double span = prev_t_ - group_.t_start_s;
   const double fraction = span > 0 ? (g.t_min_s - group_.t_start_s) / span : 0;
-  // At standstill: below 2 % of the asked speed.
-  const double still = 0.02 * std::max(g.target_mm_min, 1.0);
+  // At standstill: below 2 % of the asked speed, or within one cycle's speed change of 0 — a
+  // sampled stop lands with a last step of up to Amax·τ (the acceleration type does).
+  const double one_cycle_mm_min = machine_.max_accel_mm_s2 * machine_.period_s * 60.0 * 1.001;
+  const double still = std::max(0.02 * std::max(g.target_mm_min, 1.0), one_cycle_mm_min);
   const bool start_stopped = group_.first_speed_mm_min < still;
   const bool end_stopped = group_.last_speed_mm_min < still;
   g.visits = 1;

@@ -2,6 +2,7 @@
 // are explained by what makes them slow (values checked by hand against the machine limits).
 #include "io/report.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -124,6 +125,25 @@ TEST(ReportObserver, CornerAndEndOfProgram) {
     EXPECT_DOUBLE_EQ(s4->target_mm_min, 6000);
     // Time lost cannot exceed the time spent on the line.
     for (const ReportSlowSpot& s : r->report.slowest()) EXPECT_LE(s.lost_s, s.time_s + 1e-12);
+  }
+}
+
+// At slow feeds 2 % of F is below the last step a sampled stop may land with (Amax·τ = 120
+// mm/min here): the end of the program is still named as a stop.
+TEST(ReportObserver, EndOfProgramIsNamedAtSlowFeedsToo) {
+  for (const int feed : {1000, 500}) {
+    const fs::path program = write_program(
+        "slow.ngc", fmt::format("G21 G90 G17\nG1 X50 F{}\nG1 Y50\nG1 X0\nM2\n", feed));
+    for (const motion::AccDecType accdec :
+         {motion::AccDecType::kMovingAverage, motion::AccDecType::kAcceleration}) {
+      SCOPED_TRACE(fmt::format(
+          "F{} {}", feed,
+          accdec == motion::AccDecType::kAcceleration ? "acceleration" : "moving_average"));
+      const auto r = run(program, 100, accdec);
+      const ReportSlowSpot* s4 = spot(r->report, 4);
+      ASSERT_NE(s4, nullptr);
+      EXPECT_NE(s4->why.find("stop at the end of the program"), std::string::npos) << s4->why;
+    }
   }
 }
 
