@@ -77,12 +77,12 @@ double cycle_time_without_correction_s(const std::string& program, MachineConfig
 int command_run(const RunArgs& a) {
   const MachineConfig machine = with_correction_option(machine_from(a.machine), a.correction);
   sim::RunOptions options;
+  options.kernel = motion::kernel_options_for(machine);
   options.kernel.mode = a.mode == "stop" ? motion::Mode::kStop : motion::Mode::kLookahead;
-  options.kernel.bound_resultant_accel = machine.bound_resultant_accel;
-  const bool accel_type =
-      a.accdec.empty() ? machine.accdec == AccDecKind::kAcceleration : a.accdec == "acceleration";
-  options.kernel.accdec =
-      accel_type ? motion::AccDecType::kAcceleration : motion::AccDecType::kMovingAverage;
+  if (!a.accdec.empty()) {
+    options.kernel.accdec = a.accdec == "acceleration" ? motion::AccDecType::kAcceleration
+                                                       : motion::AccDecType::kMovingAverage;
+  }
   if (a.override_pct) {
     options.kernel.override_pct =
         override_value("--override", fmt::format("{}", *a.override_pct), machine.max_override_pct);

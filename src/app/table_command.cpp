@@ -178,7 +178,7 @@ int command_table(const TableArgs& a) {
       throw UsageError("--master-program and --master-speed exclude each other");
     }
     require_readable(a.master_program);
-    master.emplace(a.master_program, machine, motion::KernelOptions{});
+    master.emplace(a.master_program, machine, motion::kernel_options_for(machine));
     const std::size_t axis = tabs.front().ref_axis;
     // rate 0: the reference rate is not known beforehand; the measured axis speeds and
     // accelerations in the summary are checked instead.

@@ -80,8 +80,8 @@ struct MachineConfig {
   // On arcs, bound the resultant of tangential and normal acceleration by Amax (true), or each
   // of them separately (false, the seed's way: the resultant may reach √2·Amax).
   bool bound_resultant_accel = false;
-  AccDecKind accdec = AccDecKind::kMovingAverage;  // look-ahead acc/dec type
-  std::array<double, kMaxAxes> start_position{};   // position at program start ([axes.x] start_mm)
+  AccDecKind accdec = AccDecKind::kAcceleration;  // look-ahead acc/dec type
+  std::array<double, kMaxAxes> start_position{};  // position at program start ([axes.x] start_mm)
 
   // [axes.x] ...
   std::array<AxisConfig, kMaxAxes> axes{};

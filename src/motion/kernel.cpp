@@ -17,6 +17,14 @@ namespace cncore::motion {
 using planner::ItemKind;
 using planner::Segment;
 
+KernelOptions kernel_options_for(const MachineConfig& machine) {
+  KernelOptions o;
+  o.accdec = machine.accdec == AccDecKind::kAcceleration ? AccDecType::kAcceleration
+                                                         : AccDecType::kMovingAverage;
+  o.bound_resultant_accel = machine.bound_resultant_accel;
+  return o;
+}
+
 namespace {
 
 bool accel_type(const KernelOptions& o) {

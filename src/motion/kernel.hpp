@@ -26,7 +26,7 @@ enum class AccDecType : std::uint8_t {
 
 struct KernelOptions {
   Mode mode = Mode::kLookahead;
-  AccDecType accdec = AccDecType::kMovingAverage;
+  AccDecType accdec = AccDecType::kAcceleration;
   double override_pct = 100;  // initial feed override
   // Arcs: bound the resultant of tangential and normal acceleration by Amax (true) or each of
   // them separately (false, the seed's way: the resultant may reach √2·Amax).
@@ -35,6 +35,10 @@ struct KernelOptions {
   // count the cycles where it differs (reference_mismatches()). O(n) per cycle.
   bool check_reference_walk = false;
 };
+
+// The options a machine's configuration asks for: look-ahead mode, its [motion] accdec and
+// bound_resultant_accel (every command that runs the kernel for a machine starts from these).
+KernelOptions kernel_options_for(const MachineConfig& machine);
 
 // One interpolation cycle.
 struct Sample {
