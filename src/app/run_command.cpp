@@ -174,6 +174,11 @@ int command_run(const RunArgs& a) {
   }
 
   io::SummaryObserver summary(machine, a.mode);
+  // Stop mode always runs the moving average (the seed's conventional method).
+  summary.set_accdec(options.kernel.mode == motion::Mode::kStop ||
+                             options.kernel.accdec == motion::AccDecType::kMovingAverage
+                         ? "moving_average"
+                         : "acceleration");
   ProgressObserver progress;
   std::vector<sim::SampleObserver*> observers{&summary, &progress};
   if (csv) observers.push_back(&*csv);

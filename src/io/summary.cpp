@@ -296,6 +296,7 @@ std::string summary_to_json(const Summary& s, const MachineConfig& machine) {
     j["direction_correction"] = dc;
   }
   j["mode"] = s.mode;
+  if (!s.accdec.empty()) j["accdec"] = s.accdec;
   j["cycles"] = s.cycles;
   j["period_s"] = machine.period_s;
   j["machine"] = machine.name;
@@ -351,7 +352,8 @@ std::string format_human_summary(const Summary& s, const MachineConfig& machine,
                                  const std::string& program) {
   std::string o;
   o += fmt::format("program       {}\n", program);
-  o += fmt::format("machine       {} ({} mode, period {} ms)\n", machine.name, s.mode,
+  const std::string accdec = s.accdec.empty() ? "" : fmt::format(", {} acc/dec", s.accdec);
+  o += fmt::format("machine       {} ({} mode{}, period {} ms)\n", machine.name, s.mode, accdec,
                    machine.period_s * 1000);
   o += fmt::format("cycle time    {:.3f} s ({} cycles)\n", s.cycle_time_s, s.cycles);
   o += fmt::format("path length   {:.3f} mm in {} motion blocks\n", s.path_length_mm, s.blocks);

@@ -75,6 +75,7 @@ struct Summary {
   double correction_max = std::numeric_limits<double>::quiet_NaN();
   double time_without_correction_s = std::numeric_limits<double>::quiet_NaN();
   std::string mode;
+  std::string accdec;  // look-ahead acc/dec type ("acceleration", "moving_average"); "" = n/a
   std::vector<std::string> warnings;
   std::vector<SlowSpot> slowest;                      // worst first, at most 5
   std::vector<AuxEvent> aux_events;                   // the first kMaxAuxEvents, in order
@@ -88,6 +89,7 @@ class SummaryObserver : public sim::SampleObserver {
   SummaryObserver(const MachineConfig& machine, std::string mode);
   // Spec 03: the cycle time of the same program with the direction correction off.
   void set_time_without_correction_s(double t_s) { summary_.time_without_correction_s = t_s; }
+  void set_accdec(std::string accdec) { summary_.accdec = std::move(accdec); }
 
   void on_block(const Block& block) override;
   void on_sample(const motion::Sample& sample) override;

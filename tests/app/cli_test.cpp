@@ -330,6 +330,22 @@ TEST_F(Cli, StopModeIsSlowerThanLookahead) {
   EXPECT_GT(jb.at("cycle_time_s").get<double>(), ja.at("cycle_time_s").get<double>());
 }
 
+// The acc/dec type that computed the time is in the summary: the built-in machine's default
+// (acceleration), --accdec, and stop mode's moving average; the seed's example is faster with
+// the acceleration type (every speed change takes |ΔV|/Amax instead of T = Vmax/Amax).
+TEST_F(Cli, SummaryNamesTheAccDecType) {
+  const std::string p = example("seed-line-arc-line.ngc");
+  ASSERT_EQ(run("run " + p + " --summary d.json").code, 0);
+  ASSERT_EQ(run("run " + p + " --accdec moving_average --summary m.json").code, 0);
+  ASSERT_EQ(run("run " + p + " --mode stop --summary s.json").code, 0);
+  const auto jd = nlohmann::json::parse(slurp(dir_ / "d.json"));
+  const auto jm = nlohmann::json::parse(slurp(dir_ / "m.json"));
+  EXPECT_EQ(jd.at("accdec"), "acceleration");
+  EXPECT_EQ(jm.at("accdec"), "moving_average");
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "s.json")).at("accdec"), "moving_average");
+  EXPECT_LT(jd.at("cycle_time_s").get<double>(), jm.at("cycle_time_s").get<double>());
+}
+
 TEST_F(Cli, OverrideColumnFollowsTheSteps) {
   const Result r = run("run " + example("seed-line-arc-line.ngc") +
                        " --override-at 0:100,0.2:50 --trajectory t.csv");
