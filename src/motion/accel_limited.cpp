@@ -185,6 +185,13 @@ double landing_step(double d, double a) {
   return d / (m + 1) + a * m / 2;
 }
 
+// A bound b = √X − c is left out of a minimum when X ≥ above(t + c) = (t + c)²·(1 + kSkipMargin):
+// then √X − c ≥ t + (t + c)·kSkipMargin/2 exactly, far above the few roundings of either side.
+constexpr double kSkipMargin = 1e-9;
+double above(double x) {
+  return x * x * (1 + kSkipMargin);
+}
+
 double component(const Vec3& v, std::size_t i) {
   return i == 0 ? v.x : (i == 1 ? v.y : v.z);
 }
@@ -838,20 +845,42 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   }
 }
 
+double AccelLimitedAccDec::brake(double k, double sigma_p) const {
+  return std::sqrt(std::max(0.0, a0_ * a0_ + k - 2 * a0_ * sigma_p)) - a0_;
+}
+
+double AccelLimitedAccDec::lattice(double k, double sigma_p) const {
+  return std::max(0.0, std::sqrt(std::max(0.0, k - 2 * a0_ * sigma_p)) - 0.5 * a0_);
+}
+
+std::size_t AccelLimitedAccDec::level_of(double or_ratio) const {
+  if (or_ratio != level_or_) {
+    level_or_ = or_ratio;
+    level_ =
+        std::min(levels_ - 1, static_cast<std::size_t>(std::floor(or_ratio / level_step_ + 1e-9)));
+  }
+  return level_;
+}
+
+double AccelLimitedAccDec::feed_bound(double or_ratio, double sigma_p) const {
+  // min(OR·F of the active feed caps, the braking bound of the level's feed keys): the braking
+  // bound is ≥ OR·F, and left out, when its root's argument is ≥ (OR·F + A0)² (see step()).
+  const double active = or_ratio * active_feed_.min();
+  const double k = key_feed_.min(level_of(or_ratio));
+  if (k == kInf) return active;
+  if (active > 0 && active < kInf && a0_ * a0_ + k - 2 * a0_ * sigma_p >= above(active + a0_)) {
+    return active;
+  }
+  return std::min(active, brake(k, sigma_p));
+}
+
 AccelLimitedAccDec::Bounds AccelLimitedAccDec::bound(double or_ratio, double sigma_p) const {
-  auto brake = [&](double k) {
-    if (k == kInf) return kInf;
-    return std::sqrt(std::max(0.0, a0_ * a0_ + k - 2 * a0_ * sigma_p)) - a0_;
-  };
-  const std::size_t level =
-      std::min(levels_ - 1, static_cast<std::size_t>(std::floor(or_ratio / level_step_ + 1e-9)));
+  auto brake_or_inf = [&](double k) { return k == kInf ? kInf : brake(k, sigma_p); };
+  const std::size_t level = level_of(or_ratio);
   const double k_lat = key_lattice_.min();
-  const double lat =
-      k_lat == kInf
-          ? kInf
-          : std::max(0.0, std::sqrt(std::max(0.0, k_lat - 2 * a0_ * sigma_p)) - 0.5 * a0_);
-  const double geo = std::min({active_geo_.min(), brake(key_geo_.min()), lat});
-  const double feed = std::min(or_ratio * active_feed_.min(), brake(key_feed_.min(level)));
+  const double lat = k_lat == kInf ? kInf : lattice(k_lat, sigma_p);
+  const double geo = std::min({active_geo_.min(), brake_or_inf(key_geo_.min()), lat});
+  const double feed = std::min(or_ratio * active_feed_.min(), brake_or_inf(key_feed_.min(level)));
   return {geo, feed};
 }
 
@@ -906,7 +935,10 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     // the stop switch to that r, a deceleration step of up to 1.5·A0 (found with the post
     // filter, whose exact-path corners are stops).
     double reach = pos_mm_ + step_ + a0_;
-    if (in.stop_mm > pos_mm_) reach = std::min(reach, std::nextafter(in.stop_mm, pos_mm_));
+    // (A stop past the reach leaves it: the double below the stop is then ≥ reach.)
+    if (in.stop_mm > pos_mm_ && in.stop_mm <= reach) {
+      reach = std::min(reach, std::nextafter(in.stop_mm, pos_mm_));
+    }
     const Rates rates = r_span(pos_mm_, reach);
     r = rates.zones;
     r_seg = rates.plain;
@@ -919,9 +951,20 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   const double a = r * a0_;
   const double a_seg = r_seg * a0_;
 
-  const Bounds caps = bound(in.or_ratio, sigma_p);
-  last_bound_ = std::min(caps.geo, caps.feed);
-  if (check_ && reference_bound(in.or_ratio) != last_bound_) ++mismatches_;
+  // The cycle's step is a plain minimum, u = min(the change, the feed limit, the geometric caps,
+  // the braking bounds, the stop bounds, to_stop), and a minimum does not change when a term
+  // ≥ it is left out. So each braking or stop bound (a square root, the stop's landing step) is
+  // computed only where it may be below the minimum of the cheap terms so far, t; otherwise a
+  // test on squares shows that it is ≥ t (with a relative margin of kSkipMargin, far above the
+  // rounding of either side: the skipped term, rounded, is > t). Same double as the full
+  // computation (the order of a minimum does not matter; max(0, ·) below makes −0 and +0 one).
+  // The feed bound is computed exactly: the override-decrease ramp compares against it.
+  const double feed_limit = feed_bound(in.or_ratio, sigma_p);
+  if (check_) {
+    const Bounds full = bound(in.or_ratio, sigma_p);
+    last_bound_ = std::min(full.geo, full.feed);
+    if (reference_bound(in.or_ratio) != last_bound_) ++mismatches_;
+  }
 
   if (in.stop_mm != cached_stop_mm_) {
     cached_stop_mm_ = in.stop_mm;
@@ -929,21 +972,6 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   }
   const double to_stop = std::max(0.0, in.stop_mm - pos_mm_);
   const double d_sigma = std::max(0.0, cached_stop_sigma_ - sigma_p);
-  double stop_limit = std::sqrt(a0_ * a0_ / 4 + 2 * a0_ * d_sigma) - a0_ / 2;
-  stop_limit = std::max(stop_limit, std::min(to_stop, a_seg));
-  stop_limit = std::min(stop_limit, landing_step(to_stop, a_seg));
-  // The last V_t = min(A0, a_i)/2 before a stop (the lowest corner cap, a reversal) is run at
-  // ≤ V_t: a joint cap that arrives late at a stop's position (the window's tail) then finds
-  // the steps around it already within its cap (see 6.).
-  if (to_stop > 0) {
-    // In real distance with the local acceleration a (the cap lies within a few steps of the
-    // stop; farther away the stop's own σ bound is the stricter one).
-    const double vt = tail_cap_pc_;
-    const double tail =
-        to_stop <= vt ? vt
-                      : std::sqrt(a_seg * a_seg + vt * vt + 2 * a_seg * (to_stop - vt)) - a_seg;
-    stop_limit = std::min(stop_limit, tail);
-  }
 
   double u = in.hold ? step_ - a : step_ + a;
   // Around a corner (a joint cap active) the speed does not rise, except from a near stop up
@@ -967,10 +995,53 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     const double at = std::sqrt(std::max(0.0, g * g - an * an));
     a_recover = std::max(a, std::min({a0_, lin_r_[slot] * a0_, at}));
   }
-  const double feed = feed_recover_ ? std::max(step_ - a_recover, caps.feed) : caps.feed;
-  u = std::min({u, feed, caps.geo, stop_limit, to_stop});
+  const double feed = feed_recover_ ? std::max(step_ - a_recover, feed_limit) : feed_limit;
+  u = std::min({u, feed, active_geo_.min(), to_stop});
+
+  // The geometric braking bounds (3.): x ≤ √(A0² + K − 2·A0·σ) − A0 ≥ u when the root's
+  // argument is ≥ (u + A0)²; lattice keys: x ≤ √(K − 2·A0·σ) − A0/2 ≥ u when K − 2·A0·σ ≥
+  // (u + A0/2)².
+  const bool skip = u > 0 && u < kInf;
+  const double k_geo = key_geo_.min();
+  if (k_geo != kInf) {
+    const double arg = a0_ * a0_ + k_geo - 2 * a0_ * sigma_p;
+    if (!(skip && arg >= above(u + a0_))) u = std::min(u, brake(k_geo, sigma_p));
+  }
+  const double k_lat = key_lattice_.min();
+  if (k_lat != kInf) {
+    const double arg = k_lat - 2 * a0_ * sigma_p;
+    if (!(skip && arg >= above(u + 0.5 * a0_))) u = std::min(u, lattice(k_lat, sigma_p));
+  }
+
+  // The stop: its σ lattice (≥ u when A0²/4 + 2·A0·Δσ ≥ (u + A0/2)²), the landing step in real
+  // distance (≥ √(2·a·d) − a/2 for every m: d/(m + 1) + a·(m + 1)/2 ≥ √(2·a·d) by AM–GM, so
+  // ≥ u when 2·a·d ≥ (u + a/2)²; d ≤ a returns d ≥ √(2·a·d) − a/2) and the tail cap V_t.
+  const double vt = tail_cap_pc_;
+  const bool stop_far =
+      skip && u > 0 && a0_ * a0_ / 4 + 2 * a0_ * d_sigma >= above(u + a0_ / 2) &&
+      2 * a_seg * to_stop >= above(u + a_seg / 2) &&
+      (to_stop <= 0 ||
+       (to_stop <= vt ? vt >= u
+                      : a_seg * a_seg + vt * vt + 2 * a_seg * (to_stop - vt) >= above(u + a_seg)));
+  if (!stop_far) {
+    double stop_limit = std::sqrt(a0_ * a0_ / 4 + 2 * a0_ * d_sigma) - a0_ / 2;
+    stop_limit = std::max(stop_limit, std::min(to_stop, a_seg));
+    stop_limit = std::min(stop_limit, landing_step(to_stop, a_seg));
+    // The last V_t = min(A0, a_i)/2 before a stop (the lowest corner cap, a reversal) is run at
+    // ≤ V_t: a joint cap that arrives late at a stop's position (the window's tail) then finds
+    // the steps around it already within its cap (see 6.).
+    if (to_stop > 0) {
+      // In real distance with the local acceleration a (the cap lies within a few steps of the
+      // stop; farther away the stop's own σ bound is the stricter one).
+      const double tail =
+          to_stop <= vt ? vt
+                        : std::sqrt(a_seg * a_seg + vt * vt + 2 * a_seg * (to_stop - vt)) - a_seg;
+      stop_limit = std::min(stop_limit, tail);
+    }
+    u = std::min(u, stop_limit);
+  }
   u = std::max(0.0, u);
-  if (u <= caps.feed) feed_recover_ = false;
+  if (u <= feed_limit) feed_recover_ = false;
   if (u > 0 && u >= to_stop) {
     pos_mm_ = in.stop_mm;  // land exactly on the stop
   } else {

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "core/geometry.hpp"
@@ -40,6 +41,8 @@ class AccelLimitedAccDec final : public AccDec {
 
   // The plain minimum over every live cap, by a walk (O(n); tests compare it with the trees).
   double reference_bound(double or_ratio) const;
+  // The bound of the last cycle, min(geometric caps, feed caps); maintained with
+  // check_reference_walk only (step() leaves out the braking bounds that cannot bind).
   double last_bound() const { return last_bound_; }
   std::uint64_t reference_mismatches() const { return mismatches_; }
   // Acceleration used by this type along the segment in buffer slot of `index` (mm/cycle²).
@@ -99,6 +102,14 @@ class AccelLimitedAccDec final : public AccDec {
     double geo, feed;
   };
   Bounds bound(double or_ratio, double sigma_p) const;
+  // The braking bound of a key K at σ_p, √(A0² + K − 2·A0·σ_p) − A0, and of a lattice key,
+  // max(0, √(K − 2·A0·σ_p) − A0/2) (3.).
+  double brake(double k, double sigma_p) const;
+  double lattice(double k, double sigma_p) const;
+  // The feed part of bound(), the same double.
+  double feed_bound(double or_ratio, double sigma_p) const;
+  // The override level whose feed keys the cycle reads (cached for the last override).
+  std::size_t level_of(double or_ratio) const;
 
   const planner::SegmentBuffer& buf_;
   planner::Limits lim_;
@@ -107,6 +118,8 @@ class AccelLimitedAccDec final : public AccDec {
   double or_max_;
   double level_step_;  // override levels of the feed-cap key trees
   std::size_t levels_;
+  mutable double level_or_ = std::numeric_limits<double>::quiet_NaN();
+  mutable std::size_t level_ = 0;
 
   // Per buffer slot: σ at the segment start, acceleration ratio r = A_seg/A0, speed cap.
   std::vector<double> sigma0_, ratio_, vcap_;
