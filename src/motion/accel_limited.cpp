@@ -439,9 +439,13 @@ void AccelLimitedAccDec::on_retire(std::uint64_t index) {
   clear(s);
   clear(s + 1);
   clear(s + 2);
-  // The slot may next hold an event (no on_segment): no r there.
-  r_zone_.set(slot, MinTree::kEmpty);
-  r_plain_.set(slot, MinTree::kEmpty);
+  // The slot may next hold an event (no on_segment): no r there. Every leaf ≥ 1 means "no
+  // limit" to r_span() (rates are ≤ 1), so a leaf of 1 (r_plain_ ≥ r_zone_) is left as it is: the
+  // usual retirement writes nothing to the trees.
+  if (r_zone_.at(slot) < 1) {
+    r_zone_.set(slot, MinTree::kEmpty);
+    r_plain_.set(slot, MinTree::kEmpty);
+  }
 }
 
 bool AccelLimitedAccDec::detach(std::uint64_t index) {
@@ -677,15 +681,29 @@ AccelLimitedAccDec::Rates AccelLimitedAccDec::r_span(double from_mm, double to_m
     out.zones = std::min(out.zones, rate);
     return true;
   };
+  // An item's rate over any part of it lies between its rate as a whole (its leaf of r_zone_,
+  // kept current by update_r(); events and retired slots: ≥ 1) and 1, and its plain r
+  // (r_plain_) ≥ that leaf. So where no leaf of the items the walk may visit is below 1, both
+  // minima are exactly 1 (the usual case between joint zones): read from the compact leaves,
+  // not from the items.
+  const std::size_t cap = buf_.capacity();
+  auto range_min = [&](const MinTree& t, std::size_t a, std::size_t n) {
+    return a + n <= cap ? t.min_range(a, a + n)
+                        : std::min(t.min_range(a, cap), t.min_range(0, a + n - cap));
+  };
   // The usual cycle: the step stays inside the tool's segment.
   const Segment& f = buf_[first];
   if (f.kind == ItemKind::kMotion && to_mm < f.end_mm()) {
+    if (r_zone_.at(buf_.slot(first)) >= 1) return out;
     item(first);
     return out;
   }
   // The walk ends at or before `last`, the item containing to_mm (items after it start past
   // to_mm). Short spans: walked.
   const std::uint64_t last = buf_.seek(first, to_mm);
+  if (range_min(r_zone_, buf_.slot(first), static_cast<std::size_t>(last - first + 1)) >= 1) {
+    return out;
+  }
   if (last - first <= 8 || f.kind != ItemKind::kMotion || !(f.end_mm() > from_mm)) {
     for (std::uint64_t k = first; k <= last && item(k); ++k) {
     }
@@ -695,14 +713,11 @@ AccelLimitedAccDec::Rates AccelLimitedAccDec::r_span(double from_mm, double to_m
   // and the last one as in the walk; every item between starts after from_mm and ends at or
   // before to_mm (seek() skipped it), so its rate is that of the whole item: a range minimum.
   if (!item(first)) return out;
-  const std::size_t cap = buf_.capacity();
   const std::size_t a = buf_.slot(first + 1), n = static_cast<std::size_t>(last - first - 1);
-  auto range_min = [&](const MinTree& t) {
-    return a + n <= cap ? t.min_range(a, a + n)
-                        : std::min(t.min_range(a, cap), t.min_range(0, a + n - cap));
-  };
-  out.zones = std::min(out.zones, range_min(r_zone_));
-  out.plain = std::min(out.plain, range_min(r_plain_));
+  const double zones = range_min(r_zone_, a, n);
+  out.zones = std::min(out.zones, zones);
+  // r_plain_ ≥ r_zone_ leaf by leaf: its range minimum only matters below out.plain.
+  if (zones < out.plain) out.plain = std::min(out.plain, range_min(r_plain_, a, n));
   item(last);
   return out;
 }
