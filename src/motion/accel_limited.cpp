@@ -347,11 +347,10 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
         move(from, to);
         const std::size_t g = owner_[to];
         caps_[g].e_mm = s.end_mm() + reach[k];
-        if (state_[g] == State::kActive) {
-          release_.set(g, caps_[g].e_mm);
-        } else if (pos_mm_ >= entry_mm(caps_[g])) {
-          activate(g);
-        }
+        // An active cap keeps its earlier release position in release_ (≤ e): step() moves it
+        // on when the tool gets there, once per window's length instead of one tree update per
+        // block (an extended cap is the tree's minimum, so each update walked to the root).
+        if (state_[g] != State::kActive && pos_mm_ >= entry_mm(caps_[g])) activate(g);
         continue;
       }
     }
@@ -935,7 +934,16 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   advance_current();
   // Caps whose range the tool has entered, then caps it has left.
   while (entry_.min() <= pos_mm_) activate(entry_.argmin());
-  while (release_.min() <= pos_mm_) clear(where_[release_.argmin()]);
+  // (release_ may hold an active cap's earlier end, ≤ its e: on_segment() extends caps without
+  // a tree update; such a cap gets its current end and stays.)
+  while (release_.min() <= pos_mm_) {
+    const std::size_t g = release_.argmin();
+    if (caps_[g].e_mm > pos_mm_) {
+      release_.set(g, caps_[g].e_mm);
+    } else {
+      clear(where_[g]);
+    }
+  }
 
   double sigma_p = sigma_total_;
   double r = 1, r_seg = 1;
