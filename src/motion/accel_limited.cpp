@@ -577,8 +577,9 @@ void AccelLimitedAccDec::update_r(std::uint64_t index) {
   double rate = ratio_[slot];
   if (0.0 < head_mm_[slot]) rate = std::min(rate, head_r_[slot]);
   if (s.end_mm() - s.s0_mm > s.length_mm - tail_mm_[slot]) rate = std::min(rate, tail_r_[slot]);
-  r_zone_.set(slot, rate);
-  r_plain_.set(slot, ratio_[slot]);
+  // (A slot usually holds 1 already: on_retire() leaves leaves of 1.)
+  if (r_zone_.at(slot) != rate) r_zone_.set(slot, rate);
+  if (r_plain_.at(slot) != ratio_[slot]) r_plain_.set(slot, ratio_[slot]);
 }
 
 void AccelLimitedAccDec::add_head(std::size_t slot, double mm, double r) {
