@@ -64,8 +64,10 @@
 //
 // 4. Forward pass = the cycle:  u = min(u_prev + r·A0, caps active, B(min K), stop bound), r the
 // lowest
-//    over where the step can go (segments and joint zones, 7.);
-//    while a corner cap is active the speed does not rise (the turn uses the axis budget).
+//    over where the step can go (segments and joint zones, 7.). At a capped corner the zone's r
+//    is what a speed change may use next to the turn at Vg (7.), so the speed may rise there
+//    too: a rule that held it while any corner cap was active pinned it at V_t = A0/2 on
+//    paths whose corner caps overlap (circles of 0.03 mm chords: 1 mm/s for 95 s).
 //
 // 5. Feed caps and the override. A feed cap's V is OR·F and OR may change at any cycle, so its
 //    key K = (OR·F)² + 2A0σ(c) depends on OR. We keep one key tree per override *level*
@@ -415,8 +417,7 @@ void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const
   prev_ = {true, index_a,   buf_.end_index() - 1, a.end_direction(), before,
            vg,   vg_before, a.length_mm < vg};
   // A turn in the same cycle as a speed change: the joint zones (7.) keep both within every
-  // axis limit. At a capped corner, in addition, the speed does not rise while the joint cap is
-  // active (step(): the path's direction change uses the whole Amax·τ there).
+  // axis limit (at a capped corner the cap is lowered until the zone's floor fits beside it).
   if (!(vg < 0.999 * around)) return;  // the segments' own caps already hold there
   insert_joint_cap(sa, sb, a.end_mm(), a.length_mm, vg);
 }
@@ -531,7 +532,6 @@ void AccelLimitedAccDec::activate(std::size_t g) {
     clear_keys(g);
   }
   state_[g] = State::kActive;
-  if (g >= 2 * pool_) ++active_joints_;
   (cap.feed ? active_feed_ : active_geo_).set(g, cap.v);
   release_.set(g, cap.e_mm);
 }
@@ -545,7 +545,6 @@ void AccelLimitedAccDec::clear(std::size_t pos) {
   } else {
     (feed ? active_feed_ : active_geo_).set(g, MinTree::kEmpty);
     release_.set(g, MinTree::kEmpty);
-    if (g >= 2 * pool_) --active_joints_;
   }
   state_[g] = State::kEmpty;
   owner_[pos] = kNone;
@@ -946,9 +945,6 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   }
 
   double u = in.hold ? step_ - a : step_ + a;
-  // Around a corner (a joint cap active) the speed does not rise, except from a near stop up
-  // to V_t (a stop right at a corner: the first steps are then ≤ V_t, within every axis limit).
-  if (active_joints_ > 0 && lag_ == 0) u = std::min(u, std::max(step_, tail_cap_pc_));
   // Geometric caps and stops are hard limits, and so is the feed limit while the override has
   // not been lowered (following its bound needs no more than the deceleration of the zone just
   // run, 3. (ii) and 7.). After an override decrease the feed limit may drop by more than one
