@@ -110,8 +110,11 @@
 //    both on one axis (measured up to 1.38 × the limit at gentle corners). At a reversal
 //    (S = −E) or a right angle along the axes they need nothing more. So every joint without a
 //    stop gets a *zone* in which r is lowered to r_j = D/A0, D the largest value meeting the
-//    last two with V = V0, the corner's passing speed (or the segments' caps where the corner
-//    allows more); a smaller V keeps them (convex in V, and true at V = 0). When D would fall
+//    last two with V = V0, the corner's passing speed (or the larger of the segments' caps
+//    where the corner allows more: the step after the joint starts in b and is bounded by b's
+//    cap only — with the smaller one, an arc at 1 µm/cycle into a rapid turned 75° while the
+//    step grew to 3 µm, 2 479 mm/s² on a 2 000 axis); a smaller V keeps them (convex in V, and
+//    true at V = 0). When D would fall
 //    below kZoneFloor·min(r_a, r_b)·A0, D = that floor and the corner is passed slower instead
 //    (the largest V meeting both, a joint cap).
 //    The zone covers [j − 2V, j + V] (V: the largest step near the joint, V_j or the segments'
@@ -379,7 +382,9 @@ void AccelLimitedAccDec::insert_joint_cap(std::size_t slot_a, std::size_t slot_b
 void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const Segment& b) {
   const std::size_t sa = buf_.slot(index_a);
   const std::size_t sb = buf_.slot(buf_.end_index() - 1);
-  const double around = std::min(vcap_[sa], vcap_[sb]);
+  // Without a joint cap the steps next to the joint are bounded by the faster side's cap (the
+  // step after the joint starts in b): the corner is passed at up to the larger of both.
+  const double around = std::max(vcap_[sa], vcap_[sb]);
   // The corner alone (no slow-corner stop rule: that belongs to the moving average).
   // (joint_zones() computed the corner's speed for this same joint when b arrived.)
   const double corner =
@@ -708,7 +713,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   // by the r where step 2 goes (all in b when the sample is on the joint), a decrease by the r
   // of step 1 (all in a). So the larger of both must fit in the other's direction too.
   const double r_hi = std::max(ratio_[sa], ratio_[slot_b]);
-  const double around = std::min(vcap_[sa], vcap_[slot_b]);
+  const double around = std::max(vcap_[sa], vcap_[slot_b]);  // as in on_joint
   const double corner = planner::joint_speed_pc(a, b, lim_, false);
   const double v0 = std::min(around, corner);
   // Arcs next to the joint: a step of length u on an arc of curvature κ leaves its tangent's
