@@ -914,7 +914,10 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     const Rates rates = r_span(pos_mm_, reach);
     r = rates.zones;
     r_seg = rates.plain;
-    if (lag_ == 0 && arc_g_[slot] > 0 && reach < s.end_mm() && rates.zones == ratio_[slot]) {
+    // Both steps of the pair inside the arc: the step before started in it too (a pair across
+    // the joint before the arc is the joint zone's, 7., which counts on r).
+    if (lag_ == 0 && arc_g_[slot] > 0 && reach < s.end_mm() && pos_mm_ - step_ >= s.s0_mm &&
+        rates.zones == ratio_[slot]) {
       recover_arc = slot;
     }
   }
@@ -949,7 +952,19 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     stop_limit = std::min(stop_limit, tail);
   }
 
-  double u = in.hold ? step_ - a : step_ + a;
+  // On an arc whose r was fixed for its top speed (a_n = 0.95·g there), a step below the top
+  // leaves more for the tangent: rise by min(A0, √((0.98·g)² − (u⁺²/ρ)²)), u⁺ = this step plus
+  // the most it may rise (inside the tool's arc, no joint zone in reach, no filter: as 5.).
+  double rise = a;
+  if (!in.hold && recover_arc < buf_.capacity()) {
+    const std::size_t slot = recover_arc;
+    const double most = std::min(a0_, lin_r_[slot] * a0_);
+    const double u_hi = step_ + most;
+    const double an = u_hi * u_hi / arc_rho_[slot];
+    const double g = kRecoverShare * arc_g_[slot];
+    rise = std::max(a, std::min(most, std::sqrt(std::max(0.0, g * g - an * an))));
+  }
+  double u = in.hold ? step_ - a : step_ + rise;
   // Geometric caps and stops are hard limits, and so is the feed limit while the override has
   // not been lowered (following its bound needs no more than the deceleration of the zone just
   // run, 3. (ii) and 7.). After an override decrease the feed limit may drop by more than one
