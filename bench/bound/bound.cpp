@@ -66,7 +66,13 @@ void BoundBuilder::add(const Block& b) {
   const double vkind = sg.rapid ? lim_.rapid_mm_s() : lim_.feed_mm_s();
   double cap = vkind;
   if (!sg.rapid && sg.feed_mm_min > 0) cap = std::min(cap, sg.feed_mm_min / 60.0);
-  Seg s{sg.length_mm, cap, amax, std::numeric_limits<double>::infinity(), b.line, sg.arc};
+  Seg s;
+  s.length = sg.length_mm;
+  s.cap = cap;
+  s.accel = amax;
+  s.join = std::numeric_limits<double>::infinity();
+  s.line = b.line;
+  s.arc = sg.arc;
   const bool rotary_only = sg.length_mm <= 1e-12;
   if (rotary_only) {
     // A move of rotary axes only: its own length (degrees) and the slowest moving axis.
@@ -117,6 +123,10 @@ void BoundBuilder::add(const Block& b) {
     }
   }
   length_mm_ += sg.length_mm;
+  if (record_) {
+    s.start = {sg.start[kX], sg.start[kY], sg.start[kZ]};
+    s.end = {sg.end[kX], sg.end[kY], sg.end[kZ]};
+  }
   if (sg.arc && model_ == Model::kCoupled) {
     add_arc_pieces(sg, s);
   } else {
@@ -257,7 +267,8 @@ BoundResult BoundBuilder::finish() {
         st.join_cap_mm_s = s.join;
         st.time_s += t;
       } else {
-        times_.push_back({s.line, s.arc, s.length, s.cap, u[k], u[k + 1], s.join, t});
+        times_.push_back(
+            {s.line, s.arc, s.length, s.cap, u[k], u[k + 1], s.join, t, s.start, s.end});
       }
     }
     merge = s.continues;

@@ -66,6 +66,7 @@ struct SegmentTime {
   double v_out_mm_s = 0;
   double join_cap_mm_s = 0;  // the corner/stop cap at its end joint alone (before the passes)
   double time_s = 0;
+  Vec3 start, end;  // XYZ of the block's start and end
 };
 
 // Feed blocks in program order, then finish().
@@ -82,14 +83,15 @@ class BoundBuilder {
  private:
   static constexpr std::uint32_t kNoPiece = 0xffffffffu;
   struct Seg {
-    double length;  // mm (XYZ), or degrees for a rotary-only move
-    double cap;     // speed cap inside the segment, mm/s (deg/s)
-    double accel;   // acceleration limit along it (an upper bound of ā(v) on arc pieces)
-    double join;    // speed limit at its END joint (0 = stop)
+    double length = 0;  // mm (XYZ), or degrees for a rotary-only move
+    double cap = 0;     // speed cap inside the segment, mm/s (deg/s)
+    double accel = 0;   // acceleration limit along it (an upper bound of ā(v) on arc pieces)
+    double join = 0;    // speed limit at its END joint (0 = stop)
     std::uint32_t line = 0;
     bool arc = false;
     bool continues = false;          // the next Seg is the next piece of the same arc
     std::uint32_t piece = kNoPiece;  // index into pieces_ (arc pieces, kCoupled)
+    Vec3 start, end;                 // XYZ (record_segments only; an arc piece: the whole arc's)
   };
   // One axis's term (A_i − v²κ·n)/t of ā(v) on an arc piece.
   struct AxisTerm {
