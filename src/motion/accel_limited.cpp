@@ -715,7 +715,21 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   const double r_hi = std::max(ratio_[sa], ratio_[slot_b]);
   const double around = std::max(vcap_[sa], vcap_[slot_b]);  // as in on_joint
   const double corner = planner::joint_speed_pc(a, b, lim_, false);
-  const double v0 = std::min(around, corner);
+  double v0 = std::min(around, corner);
+  // After a capped joint close before (at a's start, chained; no filter) the tool cannot be
+  // faster here than it can get from that cap: ≤ √(Vp² + 2·A0·d) + 2·A0 within d of it
+  // (accelerating from ≤ Vp, or braking towards it, 3.), d ≤ L_a + 2V over the zone. A short
+  // segment between a sharp and a gentle corner otherwise got the gentle one's zone sized for
+  // the segments' caps (0.1 mm of line-contouring-xz braked at 0.22·A for a 3.6 µm segment).
+  // Used as V it becomes this joint's cap (on_joint), so the zone's premise holds either way.
+  if (lag_ == 0 && corner < around && prev_.valid && prev_.index_b == index_a) {
+    const double vp = prev_.vg / 0.999;  // its cap, or the caps around it when it had none
+    for (int it = 0; it < 8; ++it) {
+      const double reach = std::sqrt(vp * vp + 2 * a0_ * (a.length_mm + 2 * v0)) + 2 * a0_;
+      if (reach >= v0) break;
+      v0 = reach;
+    }
+  }
   // Arcs next to the joint: a step of length u on an arc of curvature κ leaves its tangent's
   // line by R(1 − cos φ) ≤ u²κ/2 along the normal N (φ = uκ) and falls short along it by
   // u − R sin φ ≤ u³κ²/6; N turns by ≤ uκ over the step. Per axis ≤ (u²κ/2)(|N_i| + uκ·h_i)
