@@ -64,8 +64,10 @@
 //
 // 4. Forward pass = the cycle:  u = min(u_prev + r·A0, caps active, B(min K), stop bound), r the
 // lowest
-//    over where the step can go (segments and joint zones, 7.);
-//    while a corner cap is active the speed does not rise (the turn uses the axis budget).
+//    over where the step can go (segments and joint zones, 7.). At a capped corner the zone's r
+//    is what a speed change may use next to the turn at Vg (7.), so the speed may rise there
+//    too: a rule that held it while any corner cap was active pinned it at V_t = A0/2 on
+//    paths whose corner caps overlap (circles of 0.03 mm chords: 1 mm/s for 95 s).
 //
 // 5. Feed caps and the override. A feed cap's V is OR·F and OR may change at any cycle, so its
 //    key K = (OR·F)² + 2A0σ(c) depends on OR. We keep one key tree per override *level*
@@ -108,8 +110,11 @@
 //    both on one axis (measured up to 1.38 × the limit at gentle corners). At a reversal
 //    (S = −E) or a right angle along the axes they need nothing more. So every joint without a
 //    stop gets a *zone* in which r is lowered to r_j = D/A0, D the largest value meeting the
-//    last two with V = V0, the corner's passing speed (or the segments' caps where the corner
-//    allows more); a smaller V keeps them (convex in V, and true at V = 0). When D would fall
+//    last two with V = V0, the corner's passing speed (or the larger of the segments' caps
+//    where the corner allows more: the step after the joint starts in b and is bounded by b's
+//    cap only — with the smaller one, an arc at 1 µm/cycle into a rapid turned 75° while the
+//    step grew to 3 µm, 2 479 mm/s² on a 2 000 axis); a smaller V keeps them (convex in V, and
+//    true at V = 0). When D would fall
 //    below kZoneFloor·min(r_a, r_b)·A0, D = that floor and the corner is passed slower instead
 //    (the largest V meeting both, a joint cap).
 //    The zone covers [j − 2V, j + V] (V: the largest step near the joint, V_j or the segments'
@@ -383,7 +388,9 @@ void AccelLimitedAccDec::insert_joint_cap(std::size_t slot_a, std::size_t slot_b
 void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const Segment& b) {
   const std::size_t sa = buf_.slot(index_a);
   const std::size_t sb = buf_.slot(buf_.end_index() - 1);
-  const double around = std::min(vcap_[sa], vcap_[sb]);
+  // Without a joint cap the steps next to the joint are bounded by the faster side's cap (the
+  // step after the joint starts in b): the corner is passed at up to the larger of both.
+  const double around = std::max(vcap_[sa], vcap_[sb]);
   // The corner alone (no slow-corner stop rule: that belongs to the moving average).
   // (joint_zones() computed the corner's speed for this same joint when b arrived.)
   const double corner =
@@ -421,8 +428,7 @@ void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const
   prev_ = {true, index_a,   buf_.end_index() - 1, a.end_direction(), before,
            vg,   vg_before, a.length_mm < vg};
   // A turn in the same cycle as a speed change: the joint zones (7.) keep both within every
-  // axis limit. At a capped corner, in addition, the speed does not rise while the joint cap is
-  // active (step(): the path's direction change uses the whole Amax·τ there).
+  // axis limit (at a capped corner the cap is lowered until the zone's floor fits beside it).
   if (!(vg < 0.999 * around)) return;  // the segments' own caps already hold there
   insert_joint_cap(sa, sb, a.end_mm(), a.length_mm, vg);
 }
@@ -541,7 +547,6 @@ void AccelLimitedAccDec::activate(std::size_t g) {
     clear_keys(g);
   }
   state_[g] = State::kActive;
-  if (g >= 2 * pool_) ++active_joints_;
   (cap.feed ? active_feed_ : active_geo_).set(g, cap.v);
   release_.set(g, cap.e_mm);
 }
@@ -555,7 +560,6 @@ void AccelLimitedAccDec::clear(std::size_t pos) {
   } else {
     (feed ? active_feed_ : active_geo_).set(g, MinTree::kEmpty);
     release_.set(g, MinTree::kEmpty);
-    if (g >= 2 * pool_) --active_joints_;
   }
   state_[g] = State::kEmpty;
   owner_[pos] = kNone;
@@ -731,9 +735,23 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   // by the r where step 2 goes (all in b when the sample is on the joint), a decrease by the r
   // of step 1 (all in a). So the larger of both must fit in the other's direction too.
   const double r_hi = std::max(ratio_[sa], ratio_[slot_b]);
-  const double around = std::min(vcap_[sa], vcap_[slot_b]);
+  const double around = std::max(vcap_[sa], vcap_[slot_b]);  // as in on_joint
   const double corner = planner::joint_speed_pc(a, b, lim_, false);
-  const double v0 = std::min(around, corner);
+  double v0 = std::min(around, corner);
+  // After a capped joint close before (at a's start, chained; no filter) the tool cannot be
+  // faster here than it can get from that cap: ≤ √(Vp² + 2·A0·d) + 2·A0 within d of it
+  // (accelerating from ≤ Vp, or braking towards it, 3.), d ≤ L_a + 2V over the zone. A short
+  // segment between a sharp and a gentle corner otherwise got the gentle one's zone sized for
+  // the segments' caps (0.1 mm of line-contouring-xz braked at 0.22·A for a 3.6 µm segment).
+  // Used as V it becomes this joint's cap (on_joint), so the zone's premise holds either way.
+  if (lag_ == 0 && corner < around && prev_.valid && prev_.index_b == index_a) {
+    const double vp = prev_.vg / 0.999;  // its cap, or the caps around it when it had none
+    for (int it = 0; it < 8; ++it) {
+      const double reach = std::sqrt(vp * vp + 2 * a0_ * (a.length_mm + 2 * v0)) + 2 * a0_;
+      if (reach >= v0) break;
+      v0 = reach;
+    }
+  }
   // Arcs next to the joint: a step of length u on an arc of curvature κ leaves its tangent's
   // line by R(1 − cos φ) ≤ u²κ/2 along the normal N (φ = uκ) and falls short along it by
   // u − R sin φ ≤ u³κ²/6; N turns by ≤ uκ over the step. Per axis ≤ (u²κ/2)(|N_i| + uκ·h_i)
@@ -966,7 +984,10 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     const Rates rates = r_span(pos_mm_, reach);
     r = rates.zones;
     r_seg = rates.plain;
-    if (lag_ == 0 && arc_g_[slot] > 0 && reach < s.end_mm() && rates.zones == ratio_[slot]) {
+    // Both steps of the pair inside the arc: the step before started in it too (a pair across
+    // the joint before the arc is the joint zone's, 7., which counts on r).
+    if (lag_ == 0 && arc_g_[slot] > 0 && reach < s.end_mm() && pos_mm_ - step_ >= s.s0_mm &&
+        rates.zones == ratio_[slot]) {
       recover_arc = slot;
     }
   }
@@ -997,10 +1018,19 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   const double to_stop = std::max(0.0, in.stop_mm - pos_mm_);
   const double d_sigma = std::max(0.0, cached_stop_sigma_ - sigma_p);
 
-  double u = in.hold ? step_ - a : step_ + a;
-  // Around a corner (a joint cap active) the speed does not rise, except from a near stop up
-  // to V_t (a stop right at a corner: the first steps are then ≤ V_t, within every axis limit).
-  if (active_joints_ > 0 && lag_ == 0) u = std::min(u, std::max(step_, tail_cap_pc_));
+  // On an arc whose r was fixed for its top speed (a_n = 0.95·g there), a step below the top
+  // leaves more for the tangent: rise by min(A0, √((0.98·g)² − (u⁺²/ρ)²)), u⁺ = this step plus
+  // the most it may rise (inside the tool's arc, no joint zone in reach, no filter: as 5.).
+  double rise = a;
+  if (!in.hold && recover_arc < buf_.capacity()) {
+    const std::size_t slot = recover_arc;
+    const double most = std::min(a0_, lin_r_[slot] * a0_);
+    const double u_hi = step_ + most;
+    const double an = u_hi * u_hi / arc_rho_[slot];
+    const double g = kRecoverShare * arc_g_[slot];
+    rise = std::max(a, std::min(most, std::sqrt(std::max(0.0, g * g - an * an))));
+  }
+  double u = in.hold ? step_ - a : step_ + rise;
   // Geometric caps and stops are hard limits, and so is the feed limit while the override has
   // not been lowered (following its bound needs no more than the deceleration of the zone just
   // run, 3. (ii) and 7.). After an override decrease the feed limit may drop by more than one

@@ -170,8 +170,7 @@ class AccelLimitedAccDec final : public AccDec {
     bool short_a = false;
   } prev_;
 
-  std::size_t active_joints_ = 0;  // joint caps active now
-  std::uint64_t cur_ = 0;          // buffer item under the tool
+  std::uint64_t cur_ = 0;  // buffer item under the tool
   double pos_mm_ = 0, step_ = 0, last_bound_ = 0;
   double cached_stop_mm_ = -1, cached_stop_sigma_ = 0;
   double prev_or_ = 0;         // the override of the last cycle

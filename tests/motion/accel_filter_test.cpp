@@ -152,7 +152,12 @@ TEST(AccelFilter, JerkStageAndPostFilterTogether) {
 // there (seen with both acc/dec types: 1.62 mm/s "speed" for 0.02 mm/s of motion, a 2 mm "path
 // error" for a tool within 0.001 mm). The post filter is covered by the programs above.
 RC_GTEST_PROP(AccelFilter, RandomProgramsKeepEveryLimit, ()) {
+  // Slow X/Y, or every axis at Amax (the built-in machine's way: a diagonal's turn and speed
+  // change meet on one axis).
   MachineConfig m = slow_axes_machine();
+  if (*rc::gen::arbitrary<bool>()) {
+    for (std::size_t i = 0; i < 3; ++i) m.axes[i].max_accel_mm_s2 = m.max_accel_mm_s2;
+  }
   m.max_jerk_mm_s3 = *rc::gen::element(0.0, 20000.0, 100000.0, 1e6);
   m.lookahead_blocks = *rc::gen::element(8, 40, 1000);
   testing::gen::BlockGenOptions g;
@@ -230,6 +235,30 @@ TEST(AccelFilter, SmallArcIntoARapidAtAGentleCornerKeepsTheSlowAxis) {
   const auto rep = check(m, p.blocks, r);
   EXPECT_TRUE(rep.ok()) << rep.summary();
   EXPECT_LE(rep.max_axis_accel_mm_s2[1], 800 * 1.005);
+  expect_end(r, p.pos);
+}
+
+// Found with every axis at Amax: an arc at F60 (1 µm/cycle) into a rapid at a 75° corner whose
+// speed (1.998 µm) equalled the arc's cap, so no joint cap was set — and the step after the
+// joint, in the rapid, grew to 3 µm during the turn: X 2 479 > 2 000 mm/s². The faster side's
+// cap is what bounds the steps next to a joint (7.).
+TEST(AccelFilter, SlowArcIntoARapidAtASharpCornerKeepsTheAxisLimit) {
+  MachineConfig m = test_machine();
+  for (std::size_t i = 0; i < 3; ++i) m.axes[i].max_accel_mm_s2 = m.max_accel_mm_s2;
+  m.lookahead_blocks = 40;
+  Prog p;
+  for (const double x : {-0.0010108785237653278, -0.0020217570475306555, -0.0040421369989481915}) {
+    p.rapid_to(Vec3{x, 0, 0});
+    p.blocks.back().path_mode = PathMode::kExactStop;
+  }
+  p.arc_to(Vec3{0.16986458999123938, 0.030664448095071045, 0},
+           Vec3{0.074758938361724037, 0.061566147532565785, 0}, 60, Vec3{0, 0, -1});
+  p.rapid_to(Vec3{0.16185831817478435, 0.028668260332854668, -0.0017137841025815538});
+  p.blocks.back().path_mode = PathMode::kExactStop;
+  const RunResult r = run(m, p.blocks, accel_opts());
+  const auto rep = check(m, p.blocks, r);
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_LE(rep.max_axis_accel_mm_s2[i], 2000 * 1.005);
   expect_end(r, p.pos);
 }
 

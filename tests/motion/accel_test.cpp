@@ -387,6 +387,33 @@ TEST(AccelLimited, OverrideDecreaseOnAFastArcDeceleratesWithWhatTheSpeedLeaves) 
   EXPECT_LE(below_at - 0.5, 0.168 + 0.003);
 }
 
+// The same arc from rest: r is fixed for the top speed (√(1 − 0.95²)·800 = 250 mm/s²), but
+// while the speed is low the normal acceleration leaves most of g for the tangent. Inside the
+// arc the type rises by min(A0, √((0.98·g)² − (u⁺²/ρ)²)) (accel_limited.cpp, step()): 784
+// mm/s² at the start, measured here from the positions; the limits still hold.
+TEST(AccelLimited, ArcRampsWithWhatTheSpeedLeaves) {
+  MachineConfig m = test_machine();
+  m.axes[kY].max_accel_mm_s2 = 800;
+  Prog p;
+  p.arc_to(Vec3{40, 0, 0}, Vec3{20, 0, 0}, 10000);
+  const RunResult r = run(m, p.blocks, accel_opts());
+  const auto rep = check(m, p.blocks, r);
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+  auto speed = [&](std::size_t k) {
+    return norm(r.samples[k].position.xyz() - r.samples[k - 1].position.xyz()) / m.period_s;
+  };
+  // Cycles 5–15: v ≤ 13 mm/s, a_n = v²/ρ ≤ 8.5 mm/s², so √(784² − a_n²) ≈ 784.
+  for (std::size_t k = 6; k <= 15; ++k) {
+    const double a_t = (speed(k) - speed(k - 1)) / m.period_s;
+    EXPECT_GT(a_t, 0.95 * 0.98 * 800) << "cycle " << k;
+    EXPECT_LE(a_t, 0.98 * 800 * 1.005) << "cycle " << k;
+  }
+  // And the top speed is still the arc's (a_n = 0.95·g).
+  double top = 0;
+  for (std::size_t k = 1; k < r.samples.size(); ++k) top = std::max(top, speed(k));
+  EXPECT_NEAR(top, std::sqrt(0.95 * 800 * 20), 0.5);
+}
+
 RC_GTEST_PROP(AccelLimited, RandomProgramsWithOverrideSteps, ()) {
   MachineConfig m = test_machine();
   m.lookahead_blocks = *rc::gen::inRange(4, 40);
