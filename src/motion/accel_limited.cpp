@@ -756,12 +756,26 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   // line by R(1 − cos φ) ≤ u²κ/2 along the normal N (φ = uκ) and falls short along it by
   // u − R sin φ ≤ u³κ²/6; N turns by ≤ uκ over the step. Per axis ≤ (u²κ/2)(|N_i| + uκ·h_i)
   // + u³κ²/6 (h_i: the axis' share of the arc plane), from each side (7.).
-  auto sag = [&](const Segment& x, double phi, double v, std::size_t i) {
-    if (!x.arc || i >= 3 || x.rho_mm <= 0) return 0.0;
-    const double k = 1.0 / x.rho_mm;
+  struct ArcSide {
+    double k = 0;                    // curvature 1/ρ; 0: not an arc
+    std::array<double, 3> n{}, h{};  // |N_i| at the joint, the axis' share of the plane
+  };
+  auto arc_side = [](const Segment& x, double phi) {
+    ArcSide side;
+    if (!x.arc || x.rho_mm <= 0) return side;
+    side.k = 1.0 / x.rho_mm;
     const Vec3 nrm = std::cos(phi) * x.e1 + std::sin(phi) * x.e2;
-    const double h = std::hypot(component(x.e1, i), component(x.e2, i));
-    return 0.5 * v * v * k * (std::abs(component(nrm, i)) + v * k * h) + v * v * v * k * k / 6.0;
+    for (std::size_t i = 0; i < 3; ++i) {
+      side.n[i] = std::abs(component(nrm, i));
+      side.h[i] = std::hypot(component(x.e1, i), component(x.e2, i));
+    }
+    return side;
+  };
+  const ArcSide side_a = arc_side(a, a.sweep_rad), side_b = arc_side(b, 0.0);
+  auto sag = [](const ArcSide& x, double v, std::size_t i) {
+    if (x.k == 0 || i >= 3) return 0.0;
+    const double k = x.k;
+    return 0.5 * v * v * k * (x.n[i] + v * k * x.h[i]) + v * v * v * k * k / 6.0;
   };
   // Headroom per axis left by the turn at speed v (7.): with both steps ≤ V and |u2 − u1| ≤ D
   // the worst second differences are V·(S_i − E_i) − D·S_i, V·(S_i − E_i) + D·E_i, D·S_i and
@@ -770,7 +784,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     double d = r_hi * a0_;
     for (std::size_t i = 0; i < kMaxAxes; ++i) {
       if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
-      const double ai = lim_.axis_amax_pc2[i] - sag(a, a.sweep_rad, v, i) - sag(b, 0.0, v, i);
+      const double ai = lim_.axis_amax_pc2[i] - sag(side_a, v, i) - sag(side_b, v, i);
       const double t = v * (s[i] - e[i]);
       if (std::abs(t) > ai) return -1.0;
       if (std::abs(s[i]) > 1e-12) {
