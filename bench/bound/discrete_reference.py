@@ -19,9 +19,10 @@ Check the result with `cncore-trajcheck PROGRAM TRAJ.csv`: if it passes, its dur
 achievable cycle time on the checker's rules.
 """
 import argparse
-import csv
 import math
 import sys
+
+import per_block
 
 
 def main():
@@ -33,21 +34,9 @@ def main():
     ap.add_argument("--margin", type=float, default=0.995)
     a = ap.parse_args()
     A, tau, m = a.accel, a.period, a.margin
-    segs = []
-    with open(a.per_block) as f:
-        for r in csv.DictReader(f, delimiter="\t"):
-            if r["kind"] != "line":
-                sys.exit("discrete_reference: arcs are not handled (line %s)" % r["line"])
-            segs.append(dict(line=int(r["line"]), L=float(r["length_mm"]), cap=float(r["cap_mm_s"]),
-                             J=float(r["join_cap_mm_s"]), u=float(r["v_out_mm_s"]),
-                             p0=[float(r["x0"]), float(r["y0"]), float(r["z0"])],
-                             p1=[float(r["x1"]), float(r["y1"]), float(r["z1"])]))
+    segs = per_block.read_lines(a.per_block, "discrete_reference")
     n = len(segs)
-    dirs = []
-    for s in segs:
-        d = [s["p1"][i] - s["p0"][i] for i in range(3)]
-        l = math.sqrt(sum(x * x for x in d))
-        dirs.append([x / l for x in d])
+    dirs = [per_block.unit(s) for s in segs]
     step = m * A * tau * tau  # largest change of a cycle's length (mm) from one cycle to the next
 
     def ok_corner(E, S, V, D):
@@ -140,9 +129,7 @@ def main():
         return xs
 
     # Cycle lengths along the path and the sample positions s_k.
-    S_start = [0.0]
-    for s in segs:
-        S_start.append(S_start[-1] + s["L"])
+    S_start = per_block.starts(segs)
     lengths = []
     pos = 0.0  # where the next cycle starts
     rest = (0.0, step / tau)  # the cycle next to a stop: at most A*tau
@@ -165,27 +152,15 @@ def main():
             pos = end
             after = rest
     # Positions to samples.
-    out = open(a.out, "w")
-    out.write("t,line,x,y,z\n")
-    si = 0
-
-    def point(sv):
-        nonlocal si
-        while si + 1 < n and S_start[si + 1] < sv:
-            si += 1
-        s = segs[si]
-        f = 0.0 if s["L"] <= 0 else min(1.0, max(0.0, (sv - S_start[si]) / s["L"]))
-        return s["line"], [s["p0"][i] + f * (s["p1"][i] - s["p0"][i]) for i in range(3)]
-
-    ln, xyz = point(0.0)
-    out.write("%.6f,%d,%.10f,%.10f,%.10f\n" % (0.0, ln, *xyz))
+    out = per_block.TrajectoryCsv(a.out)
+    path = per_block.PathPoints(segs)
+    out.row(0.0, *path.at(0.0))
     sv = 0.0
     for k, x in enumerate(lengths, 1):
         sv = min(S_start[-1], sv + x)
         if k == len(lengths):
             sv = S_start[-1]
-        ln, xyz = point(sv)
-        out.write("%.6f,%d,%.10f,%.10f,%.10f\n" % (k * tau, ln, *xyz))
+        out.row(k * tau, *path.at(sv))
     out.close()
     print("reference_s=%.6f cycles=%d joints=%d infeasible_gaps=%d"
           % (len(lengths) * tau, len(lengths), n - 1, infeasible[0]))

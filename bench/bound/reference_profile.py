@@ -29,10 +29,30 @@ construction's own slack.
 """
 import argparse
 import bisect
-import csv
 import heapq
 import math
-import sys
+
+import per_block
+
+
+def interval_min(events, bps):
+    """Per interval (bps[m], bps[m+1]): the least value of the events (pos, 0 = open / 1 = close,
+    value, id) open at bps[m]; inf where none is. Both lists sorted by position."""
+    out = []
+    heap, closed = [], set()
+    ei = 0
+    for m in range(len(bps) - 1):
+        while ei < len(events) and events[ei][0] <= bps[m]:
+            _, kind, val, idd = events[ei]
+            if kind == 0:
+                heapq.heappush(heap, (val, idd))
+            else:
+                closed.add(idd)
+            ei += 1
+        while heap and heap[0][1] in closed:
+            heapq.heappop(heap)
+        out.append(heap[0][0] if heap else math.inf)
+    return out
 
 
 def main():
@@ -49,26 +69,10 @@ def main():
     A, tau, k = a.accel, a.period, a.plateau
     acc = a.margin * A
 
-    segs = []
-    with open(a.per_block) as f:
-        for r in csv.DictReader(f, delimiter="\t"):
-            if r["kind"] != "line":
-                sys.exit("reference_profile: arcs are not handled (line %s)" % r["line"])
-            segs.append(dict(line=int(r["line"]), L=float(r["length_mm"]), cap=float(r["cap_mm_s"]),
-                             J=float(r["join_cap_mm_s"]),
-                             p0=(float(r["x0"]), float(r["y0"]), float(r["z0"])),
-                             p1=(float(r["x1"]), float(r["y1"]), float(r["z1"]))))
+    segs = per_block.read_lines(a.per_block, "reference_profile")
     n = len(segs)
-    S = [0.0]
-    for s in segs:
-        S.append(S[-1] + s["L"])
-
-    def unit(s):
-        d = [s["p1"][i] - s["p0"][i] for i in range(3)]
-        l = math.sqrt(sum(x * x for x in d))
-        return [x / l for x in d] if l > 0 else [0, 0, 0]
-
-    dirs = [unit(s) for s in segs]
+    S = per_block.starts(segs)
+    dirs = [per_block.unit(s) for s in segs]
     # Joints: end of segment i (i < n-1); the end of the program is a stop.
     theta = []
     for i in range(n - 1):
@@ -136,36 +140,8 @@ def main():
     events.sort()
     aevents.sort()
     bps = sorted(set([e[0] for e in events] + [e[0] for e in aevents]))
-    caps = []  # cap of (bps[m], bps[m+1])
-    heap, closed = [], set()
-    ei = 0
-    for m in range(len(bps) - 1):
-        x = bps[m]
-        while ei < len(events) and events[ei][0] <= x:
-            pos, kind, val, idd = events[ei]
-            if kind == 0:
-                heapq.heappush(heap, (val, idd))
-            else:
-                closed.add(idd)
-            ei += 1
-        while heap and heap[0][1] in closed:
-            heapq.heappop(heap)
-        caps.append(heap[0][0] if heap else math.inf)
-    accs = []  # acceleration of (bps[m], bps[m+1])
-    heap, closed = [], set()
-    ei = 0
-    for m in range(len(bps) - 1):
-        x = bps[m]
-        while ei < len(aevents) and aevents[ei][0] <= x:
-            pos, kind, val, idd = aevents[ei]
-            if kind == 0:
-                heapq.heappush(heap, (val, idd))
-            else:
-                closed.add(idd)
-            ei += 1
-        while heap and heap[0][1] in closed:
-            heapq.heappop(heap)
-        accs.append(min(acc, heap[0][0]) if heap else acc)
+    caps = interval_min(events, bps)  # cap of (bps[m], bps[m+1])
+    accs = [min(acc, x) for x in interval_min(aevents, bps)]  # acceleration of the same
     # Node caps: 0 at stops and the ends; else the smaller neighbouring interval cap.
     stop_pos = set(P[i] for i in stops)
     nb = len(bps)
@@ -203,24 +179,11 @@ def main():
         return da + cr + vp * t - 0.5 * acc * t * t
 
     # Sample: pieces between stops restart at the next whole cycle.
-    out = open(a.out, "w")
-    out.write("t,line,x,y,z\n")
-    seg_i = 0
-
-    def point(sv):
-        nonlocal seg_i
-        while seg_i + 1 < n and S[seg_i + 1] < sv:
-            seg_i += 1
-        while seg_i > 0 and S[seg_i] > sv:
-            seg_i -= 1
-        s = segs[seg_i]
-        f = 0.0 if s["L"] <= 0 else min(1.0, max(0.0, (sv - S[seg_i]) / s["L"]))
-        return s["line"], [s["p0"][j] + f * (s["p1"][j] - s["p0"][j]) for j in range(3)]
-
+    out = per_block.TrajectoryCsv(a.out)
+    path = per_block.PathPoints(segs)
     T0 = 0.0  # absolute time of the current piece's start (a multiple of tau)
     kcyc = 0
-    ln, xyz = point(0.0)
-    out.write("%.6f,%d,%.10f,%.10f,%.10f\n" % (0.0, ln, *xyz))
+    out.row(0.0, *path.at(0.0))
     m = 0
     while m < nb - 1:
         # One piece: intervals m .. m2-1, ending at a node with u = 0 (a stop or the end).
@@ -246,8 +209,7 @@ def main():
                 sv = bps[m + q] + dist_at(ph[q], t - tstart[q])
                 sv = min(sv, bps[m2])
             kcyc += 1
-            ln, xyz = point(sv)
-            out.write("%.6f,%d,%.10f,%.10f,%.10f\n" % (kcyc * tau, ln, *xyz))
+            out.row(kcyc * tau, *path.at(sv))
         m = m2
     out.close()
     print("reference_s=%.6f cycles=%d joints=%d stops=%d" % (kcyc * tau, kcyc, n - 1, len(stops) + 1))

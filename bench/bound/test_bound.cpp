@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "bound.hpp"
+#include "trajectory.hpp"
+#include "trajectory_checker.hpp"
 
 namespace cncore::bound {
 namespace {
@@ -117,28 +119,14 @@ TEST(Bound, BrakingForASlowBlockAhead) {
               t1 + t2_exact, 1e-12);
 }
 
-}  // namespace
-}  // namespace cncore::bound
-
-namespace cncore::bound {
-namespace {
-
-AxisVec Q(double x, double y, double z = 0) {
-  AxisVec p;
-  p[kX] = x;
-  p[kY] = y;
-  p[kZ] = z;
-  return p;
-}
-
 TEST(BoundCoupled, LineAcceleratesAtTheAxisShare) {
   // 45° line, X and Y limited to 1000 mm/s²: each axis gets a_t/√2, so a_t ≤ 1000·√2.
   testing::Limits lim;
   lim.axis_accel_mm_s2[kX] = lim.axis_accel_mm_s2[kY] = 1000;
   Block b;
   b.kind = BlockKind::kLine;
-  b.start = Q(0, 0);
-  b.end = Q(100, 100);
+  b.start = P(0, 0);
+  b.end = P(100, 100);
   b.feed_mm_min = 6000;
   const double a = 1000 * std::sqrt(2.0), l = 100 * std::sqrt(2.0), v = 100;
   EXPECT_NEAR(optimal_time_s({b}, lim), v / a + l / v, 1e-12);
@@ -196,8 +184,8 @@ TEST(BoundCoupled, ArcRampsWithTheNormalAccelerationsShare) {
   // v²/R reach A, where an axis at 45° to the tangent leaves a_t ≤ (√2 − 1)·A.
   Block a;
   a.kind = BlockKind::kArc;
-  a.start = Q(5, 0);
-  a.end = Q(-5, 0);
+  a.start = P(5, 0);
+  a.end = P(-5, 0);
   a.center = {0, 0, 0};
   a.normal = {0, 0, 1};
   a.feed_mm_min = 6000;
@@ -219,18 +207,9 @@ TEST(BoundCoupled, ArcRampsWithTheNormalAccelerationsShare) {
   std::printf("arc R5 180deg: simple %.6f coupled %.6f exact %.6f s\n", simple, coupled, exact);
 }
 
-}  // namespace
-}  // namespace cncore::bound
-
 // The bound is a lower bound of a sampled trajectory the checker accepts, and close to it on a
 // dense zig-zag of capped corners: a trajectory built cycle by cycle (bench/bound/
 // discrete_reference.py) passes every corner with ONE cycle centred on it.
-#include "trajectory.hpp"
-#include "trajectory_checker.hpp"
-
-namespace cncore::bound {
-namespace {
-
 TEST(BoundHonesty, ZigzagHasACheckedTrajectoryWithin5PercentOfTheBound) {
   // linuxcnc-tp/zigzag_0.002_0.0005 in mm: strokes of (0.0508, ±0.0254) mm at F > Vmax; corners
   // of θ = 2·atan(1/2) = 53.13°, V_g = A·τ/(2 sin(θ/2)) = 2/(2/√5) = √5 mm/s.
@@ -243,8 +222,8 @@ TEST(BoundHonesty, ZigzagHasACheckedTrajectoryWithin5PercentOfTheBound) {
     Block b;
     b.kind = BlockKind::kLine;
     b.line = static_cast<std::uint32_t>(i + 1);
-    b.start = Q(dx * i, y0);
-    b.end = Q(dx * (i + 1), y1);
+    b.start = P(dx * i, y0);
+    b.end = P(dx * (i + 1), y1);
     b.feed_mm_min = 9999 * 25.4;
     blocks.push_back(b);
   }

@@ -196,6 +196,23 @@ const char* type_name(int type) {
   return type == 0 ? "moving_average" : "acceleration";
 }
 
+// Feeds a program's blocks as the kernel asks for them and steps it to the end; on_sample sees
+// every sample. Returns the cycles stepped.
+template <class OnSample>
+std::uint64_t drive(motion::Kernel& k, const std::vector<Block>& blocks, OnSample on_sample) {
+  std::uint64_t cycles = 0;
+  std::size_t next = 0;
+  motion::Sample s;
+  for (;;) {
+    while (next < blocks.size() && k.wants_block()) k.push(blocks[next++]);
+    if (next == blocks.size()) k.end_of_program();
+    if (!k.step(s)) break;
+    on_sample(s);
+    ++cycles;
+  }
+  return cycles;
+}
+
 // Cycles per second of Kernel::push + Kernel::step on a pre-interpreted program (construction
 // and destruction not timed). Also: heap bytes allocated by the kernel's construction and
 // allocations while it runs (must be 0: memory flat in program length).
@@ -222,16 +239,7 @@ void BM_Throughput(benchmark::State& state, LazyProgram* lazy, int type) {
     const std::uint64_t a0 = g_allocs;
     state.ResumeTiming();
     const auto w0 = std::chrono::steady_clock::now();
-    std::size_t next = 0;
-    const std::size_t n = prog->blocks.size();
-    motion::Sample s;
-    for (;;) {
-      while (next < n && k->wants_block()) k->push(prog->blocks[next++]);
-      if (next == n) k->end_of_program();
-      if (!k->step(s)) break;
-      benchmark::DoNotOptimize(s);
-      ++cycles;
-    }
+    cycles += drive(*k, prog->blocks, [](motion::Sample& s) { benchmark::DoNotOptimize(s); });
     wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
     state.PauseTiming();
     run_allocs = g_allocs - a0;
@@ -410,24 +418,18 @@ void print_digests() {
       const Program& prog = lazy.get();
       if (!prog.ok) continue;
       motion::Kernel k(m, options(type));
-      std::uint64_t h = 1469598103934665603ull, cycles = 0;
+      std::uint64_t h = 1469598103934665603ull;
       auto mix = [&h](const void* p, std::size_t n) {
         const auto* c = static_cast<const unsigned char*>(p);
         for (std::size_t i = 0; i < n; ++i) h = (h ^ c[i]) * 1099511628211ull;
       };
-      std::size_t next = 0;
-      motion::Sample s;
-      for (;;) {
-        while (next < prog.blocks.size() && k.wants_block()) k.push(prog.blocks[next++]);
-        if (next == prog.blocks.size()) k.end_of_program();
-        if (!k.step(s)) break;
+      const std::uint64_t cycles = drive(k, prog.blocks, [&mix](const motion::Sample& s) {
         mix(&s.t_s, sizeof s.t_s);
         mix(&s.line, sizeof s.line);
         mix(&s.position, sizeof s.position);
         mix(&s.path_position, sizeof s.path_position);
         mix(&s.feed_mm_min, sizeof s.feed_mm_min);
-        ++cycles;
-      }
+      });
       std::printf("%-18s %-15s cycles %8llu  digest %016llx\n", prog.name.c_str(), type_name(type),
                   static_cast<unsigned long long>(cycles), static_cast<unsigned long long>(h));
     }
@@ -448,15 +450,7 @@ int profile(const std::string& name, const std::string& type, int runs) {
     const auto w0 = std::chrono::steady_clock::now();
     for (int run = 0; run < runs; ++run) {
       motion::Kernel k(m, options(t));
-      std::size_t next = 0;
-      motion::Sample s;
-      for (;;) {
-        while (next < prog.blocks.size() && k.wants_block()) k.push(prog.blocks[next++]);
-        if (next == prog.blocks.size()) k.end_of_program();
-        if (!k.step(s)) break;
-        benchmark::DoNotOptimize(s);
-        ++cycles;
-      }
+      cycles += drive(k, prog.blocks, [](motion::Sample& s) { benchmark::DoNotOptimize(s); });
     }
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
     std::printf("%s %s: %llu cycles in %.3f s\n", name.c_str(), type_name(t),

@@ -1,0 +1,66 @@
+"""Shared by reference_profile.py and discrete_reference.py: the `cncore-bound --per-block` TSV
+of a program of lines, and points along its path for the trajectory CSV they write."""
+import csv
+import math
+import sys
+
+
+def read_lines(path, tool):
+    """The blocks of a per-block TSV as dicts (line, L, cap, J, u, p0, p1); arcs are refused."""
+    segs = []
+    with open(path) as f:
+        for r in csv.DictReader(f, delimiter="\t"):
+            if r["kind"] != "line":
+                sys.exit("%s: arcs are not handled (line %s)" % (tool, r["line"]))
+            segs.append(dict(line=int(r["line"]), L=float(r["length_mm"]),
+                             cap=float(r["cap_mm_s"]), J=float(r["join_cap_mm_s"]),
+                             u=float(r["v_out_mm_s"]),
+                             p0=[float(r["x0"]), float(r["y0"]), float(r["z0"])],
+                             p1=[float(r["x1"]), float(r["y1"]), float(r["z1"])]))
+    return segs
+
+
+def unit(seg):
+    """The block's direction (0 for a zero-length block)."""
+    d = [seg["p1"][i] - seg["p0"][i] for i in range(3)]
+    l = math.sqrt(sum(x * x for x in d))
+    return [x / l for x in d] if l > 0 else [0.0, 0.0, 0.0]
+
+
+def starts(segs):
+    """Path position of every block's start, and the path's length last."""
+    s = [0.0]
+    for seg in segs:
+        s.append(s[-1] + seg["L"])
+    return s
+
+
+class PathPoints:
+    """(line, [x, y, z]) at path position sv; a cursor, cheap for positions close together."""
+
+    def __init__(self, segs):
+        self.segs, self.s, self.i = segs, starts(segs), 0
+
+    def at(self, sv):
+        n = len(self.segs)
+        while self.i + 1 < n and self.s[self.i + 1] < sv:
+            self.i += 1
+        while self.i > 0 and self.s[self.i] > sv:
+            self.i -= 1
+        seg = self.segs[self.i]
+        f = 0.0 if seg["L"] <= 0 else min(1.0, max(0.0, (sv - self.s[self.i]) / seg["L"]))
+        return seg["line"], [seg["p0"][j] + f * (seg["p1"][j] - seg["p0"][j]) for j in range(3)]
+
+
+class TrajectoryCsv:
+    """The `t,line,x,y,z` CSV cncore-trajcheck reads."""
+
+    def __init__(self, path):
+        self.f = open(path, "w")
+        self.f.write("t,line,x,y,z\n")
+
+    def row(self, t, line, xyz):
+        self.f.write("%.6f,%d,%.10f,%.10f,%.10f\n" % (t, line, *xyz))
+
+    def close(self):
+        self.f.close()
