@@ -93,6 +93,10 @@ class AccelLimitedAccDec final : public AccDec {
   // A joint a → b without a stop between: the acceleration zones on both sides (see 7.).
   void joint_zones(std::uint64_t index_a, std::size_t slot_b, const planner::Segment& b);
   void advance_current();
+  // The cycle after the tool crossed a capped joint between two lines (9.): the exact limit of
+  // this cycle's step from the second difference around the crossing (kInf: none; the joint cap
+  // then stays). Clears the joint cap when it returns a limit.
+  double after_corner();
   // Lowers r over the first `mm` of the segment in `slot` to at most `r` (head zone).
   void add_head(std::size_t slot, double mm, double r);
   // A head zone that reaches past the segment it starts in (8.): r ≤ `r` up to path position
@@ -169,6 +173,13 @@ class AccelLimitedAccDec final : public AccDec {
     double vg2 = 0;
     bool short_a = false;
   } prev_;
+
+  // The last step left the line under the tool at its end j_mm (direction e there): 9.
+  struct Crossed {
+    bool valid = false;
+    double j_mm = 0, from_mm = 0;
+    AxisVec e;
+  } crossed_;
 
   std::uint64_t cur_ = 0;  // buffer item under the tool
   double pos_mm_ = 0, step_ = 0, last_bound_ = 0;

@@ -414,6 +414,34 @@ TEST(AccelLimited, ArcRampsWithWhatTheSpeedLeaves) {
   EXPECT_NEAR(top, std::sqrt(0.95 * 800 * 20), 0.5);
 }
 
+// A zig-zag of 5 mm strokes turning 53° at every corner: Vg = Amax·τ/(2 sin 26.6°) = 2.24 mm/s.
+// The cycle after the one that crosses a corner no longer keeps the corner's cap: its limit is
+// the exact second difference around the crossing (accel_limited.cpp, 9.), so where the crossing
+// sample lies close to the corner the speed rises by up to Amax·τ at once. Measured from the
+// positions: the first chord after each corner's crossing chord.
+TEST(AccelLimited, SpeedRisesRightAfterTheCycleThatCrossesACappedCorner) {
+  const MachineConfig m = test_machine();
+  Prog p;
+  for (int i = 1; i <= 20; ++i) p.line_to(Vec3{5.0 * i, i % 2 ? 2.5 : 0.0, 0}, 10000);
+  const RunResult r = run_checked(m, p);
+  const double vg = m.max_accel_mm_s2 * m.period_s / (2 * std::sin(std::atan(0.5)));
+  auto chord = [&](std::size_t k) {
+    return norm(r.samples[k].position.xyz() - r.samples[k - 1].position.xyz()) / m.period_s;
+  };
+  int corners = 0, risen = 0;
+  for (int i = 1; i < 20; ++i) {
+    const double x = 5.0 * i;
+    std::size_t k = 1;
+    while (k < r.samples.size() && r.samples[k].position[kX] < x) ++k;
+    ASSERT_LT(k + 1, r.samples.size());
+    ++corners;
+    EXPECT_LE(chord(k), vg * 1.005) << "corner " << i;  // the crossing chord (≤ its path speed)
+    if (chord(k + 1) >= vg + 0.5 * m.max_accel_mm_s2 * m.period_s) ++risen;
+  }
+  EXPECT_EQ(corners, 19);
+  EXPECT_GE(risen, 15) << "of " << corners;
+}
+
 RC_GTEST_PROP(AccelLimited, RandomProgramsWithOverrideSteps, ()) {
   MachineConfig m = test_machine();
   m.lookahead_blocks = *rc::gen::inRange(4, 40);
