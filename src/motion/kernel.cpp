@@ -370,9 +370,12 @@ struct Kernel::Impl {
   bool have_motion = false;
   bool barrier_since_motion = false;
   std::uint64_t last_motion = 0;
-  std::vector<std::uint64_t> barriers;  // unprocessed stop events, in order (fixed ring)
+  // Rings sized by the window (huge_pages.hpp: cheap to touch at construction).
+  template <typename T>
+  using Ring = std::vector<T, planner::HugePageAllocator<T>>;
+  Ring<std::uint64_t> barriers;  // unprocessed stop events, in order (fixed ring)
   std::size_t bq_head = 0, bq_size = 0;
-  std::vector<std::uint64_t> events;  // indices of event items not yet passed (fixed ring)
+  Ring<std::uint64_t> events;  // indices of event items not yet passed (fixed ring)
   std::size_t ev_head = 0, ev_size = 0;
 
   bool ended = false, started = false, hold = false;
