@@ -1,5 +1,6 @@
 #include "planner/huge_pages.hpp"
 
+#include <atomic>
 #include <cstdint>
 #include <mutex>
 #include <new>
@@ -21,6 +22,8 @@ constexpr std::size_t kRegion = 8 * kHugePage;      // virtual size of a region 
 std::size_t round_up(std::size_t n, std::size_t to) {
   return (n + to - 1) / to * to;
 }
+
+std::atomic<std::uint64_t> g_allocations{0}, g_bytes{0};
 
 #if defined(__linux__)
 
@@ -55,7 +58,13 @@ char* map_region(std::size_t size) {
 
 }  // namespace
 
+HugeAllocStats huge_alloc_stats() {
+  return {g_allocations.load(std::memory_order_relaxed), g_bytes.load(std::memory_order_relaxed)};
+}
+
 void* huge_alloc(std::size_t bytes) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  g_bytes.fetch_add(bytes, std::memory_order_relaxed);
   if (bytes < kSmall) return ::operator new (bytes > 0 ? bytes : 1, std::align_val_t{kAlign});
 #if defined(__linux__)
   const std::size_t need = round_up(bytes, kAlign);

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <new>
 
 namespace cncore::planner {
@@ -23,6 +24,13 @@ namespace cncore::planner {
 void* huge_alloc(std::size_t bytes);
 // Returns memory from huge_alloc (same size).
 void huge_free(void* p, std::size_t bytes) noexcept;
+
+// Totals since the process started (benchmarks: this memory bypasses a replaced operator new).
+struct HugeAllocStats {
+  std::uint64_t allocations = 0;  // huge_alloc calls
+  std::uint64_t bytes = 0;        // bytes asked for
+};
+HugeAllocStats huge_alloc_stats();
 
 // std-compatible allocator over huge_alloc: std::vector<T, HugePageAllocator<T>>.
 template <typename T>

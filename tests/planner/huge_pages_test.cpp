@@ -52,6 +52,17 @@ TEST(HugePages, TheMemoryOfAFreedBufferIsReused) {
   huge_free(second, 5 * 1000 * 1000);
 }
 
+TEST(HugePages, StatsCountEveryAllocation) {
+  const HugeAllocStats before = huge_alloc_stats();
+  void* small = huge_alloc(1000);
+  void* large = huge_alloc(1000 * 1000);
+  const HugeAllocStats after = huge_alloc_stats();
+  EXPECT_EQ(after.allocations - before.allocations, 2u);
+  EXPECT_EQ(after.bytes - before.bytes, 1000u + 1000u * 1000u);
+  huge_free(large, 1000 * 1000);
+  huge_free(small, 1000);
+}
+
 TEST(HugePages, SegmentBufferOfAWholeWindowWorks) {
   SegmentBuffer buf(10002);
   for (std::uint64_t k = 0; k < 3 * buf.capacity(); ++k) {
