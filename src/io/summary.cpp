@@ -43,6 +43,13 @@ SummaryObserver::SummaryObserver(const MachineConfig& machine, std::string mode)
   const double cycles = std::ceil(window_s / machine.period_s) + 2;
   path_ring_.resize(static_cast<std::size_t>(std::min(cycles, 512.0)));
   top_.reserve(kSlowCandidates);
+  constexpr double kSlack = 1e-6;  // travel_check: a set-point this far outside is still inside
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    const AxisConfig& a = machine.axes[i];
+    if (a.enabled) travel_unwarned_ |= 1u << i;
+    travel_lo_mm_[i] = a.min_mm - kSlack;
+    travel_hi_mm_[i] = a.max_mm + kSlack;
+  }
 }
 
 void SummaryObserver::on_block(const Block& b) {
@@ -75,6 +82,8 @@ void SummaryObserver::on_block(const Block& b) {
 // The programmed feed of the block now executing on `line` (F clamped to the machine's limit),
 // matched in order against the blocks handed to the kernel. Returns -1 when unknown.
 const SummaryObserver::Pending* SummaryObserver::current_block(std::uint32_t line) {
+  // Nearly every sample is on the block at the front: no deque indexing then.
+  if (!pending_.empty() && pending_.front().line == line) return &pending_.front();
   const std::size_t n = std::min(pending_.size(), kMatchWindow);
   for (std::size_t j = 0; j < n; ++j) {
     if (pending_[j].line == line) {
@@ -111,13 +120,13 @@ void SummaryObserver::close_group() {
 }
 
 void SummaryObserver::travel_check(const motion::Sample& s) {
+  if (travel_unwarned_ == 0) return;
   for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    if ((travel_unwarned_ & (1u << i)) == 0) continue;
     const AxisConfig& a = machine_.axes[i];
-    if (!a.enabled || travel_warned_[i]) continue;
     const double p = s.position[i];
-    constexpr double kSlack = 1e-6;
-    if (p < a.min_mm - kSlack || p > a.max_mm + kSlack) {
-      travel_warned_[i] = true;
+    if (p < travel_lo_mm_[i] || p > travel_hi_mm_[i]) {
+      travel_unwarned_ &= ~(1u << i);
       const char* unit = a.rotary ? "deg" : "mm";
       summary_.warnings.push_back(fmt::format(
           "axis {} leaves its travel at line {} (t = {:.3f} s): {} = {:.3f} {}, travel {} … {} {}",
@@ -163,16 +172,24 @@ void SummaryObserver::on_sample(const motion::Sample& s) {
   }
 
   // Contour error: distance from the servo set-point to the polyline of recent on-path points.
+  // Ring indices step by compare instead of `%` (an integer division per sample and two per
+  // point of the window).
   const Vec3 path = s.path_position.xyz();
+  const std::size_t ring_n = path_ring_.size();
   path_ring_[ring_next_] = path;
-  ring_next_ = (ring_next_ + 1) % path_ring_.size();
-  ring_size_ = std::min(ring_size_ + 1, path_ring_.size());
+  ring_next_ = ring_next_ + 1 == ring_n ? 0 : ring_next_ + 1;
+  ring_size_ = std::min(ring_size_ + 1, ring_n);
   const Vec3 pos = s.position.xyz();  // disabled slots stay 0 in both
-  double contour = norm(pos - path);
+  const Vec3 lag = pos - path;
+  const double lag2 = dot(lag, lag);
+  // = norm(pos − path); without a post filter the set-point is on the path (0, no root).
+  double contour = lag2 == 0 ? 0.0 : std::sqrt(lag2);
   summary_.max_servo_lag_mm = std::max(summary_.max_servo_lag_mm, contour);
+  std::size_t newer = ring_next_;
   for (std::size_t k = 1; k < ring_size_ && contour > 0; ++k) {
-    const std::size_t newer = (ring_next_ + path_ring_.size() - k) % path_ring_.size();
-    const std::size_t older = (newer + path_ring_.size() - 1) % path_ring_.size();
+    // newer = ring_next_ − k, older = newer − 1 (mod the ring size)
+    newer = newer == 0 ? ring_n - 1 : newer - 1;
+    const std::size_t older = newer == 0 ? ring_n - 1 : newer - 1;
     contour = std::min(contour, segment_distance(pos, path_ring_[older], path_ring_[newer]));
   }
   summary_.max_contour_error_mm = std::max(summary_.max_contour_error_mm, contour);

@@ -127,7 +127,10 @@ class SummaryObserver : public sim::SampleObserver {
   // Current line group (consecutive samples on one line) for the slowest spots.
   SlowSpot group_;
   std::vector<SlowSpot> top_;  // bounded candidate set, merged by line
-  std::array<bool, kMaxAxes> travel_warned_{};
+  // travel_check: bit i set while enabled axis i has not left its travel yet; the limits with
+  // their slack, computed once (the same doubles as computing them per sample).
+  unsigned travel_unwarned_ = 0;
+  std::array<double, kMaxAxes> travel_lo_mm_{}, travel_hi_mm_{};
   bool record_sample_events_ = true;
   double load_sum_pct_ = 0;  // Σ load over the cycles with a reading
   std::uint64_t load_cycles_ = 0;

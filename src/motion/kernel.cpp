@@ -249,11 +249,16 @@ struct Kernel::Impl {
     }
   }
 
-  AxisVec interpolate(double tool) const {
-    if (buf.empty() || out_idx >= buf.end_index()) return last_end;
-    const Segment& it = buf[out_idx];
-    if (it.kind != ItemKind::kMotion) return it.end;
-    return it.point_at(tool - it.s0_mm);
+  // The item under the tool, nullptr before the first block.
+  const Segment* current() const {
+    return (buf.empty() || out_idx >= buf.end_index()) ? nullptr : &buf[out_idx];
+  }
+
+  // The point on the path at `tool` on item `cur` (the item under the tool; nullptr: none yet).
+  AxisVec interpolate(const Segment* cur, double tool) const {
+    if (cur == nullptr) return last_end;
+    if (cur->kind != ItemKind::kMotion) return cur->end;
+    return cur->point_at(tool - cur->s0_mm);
   }
 
   void retire() {
@@ -268,21 +273,24 @@ struct Kernel::Impl {
     }
   }
 
-  void post_filter(const AxisVec& p) {
+  // The set-point sent to the servos for path point p (stored in `position` and returned: the
+  // caller fills the sample from the returned value, not by reloading the member, whose
+  // piecewise stores a wider reload could not forward from).
+  AxisVec post_filter(const AxisVec& p) {
     if (!lim.post_filter()) {
       position = p;
-      return;
+      return p;
     }
     // Per-axis moving average over Tp cycles (running sum; exact once the path stood still
-    // for Tp cycles).
-    post_still =
-        (p == post_ring[(post_pos + post_ring.size() - 1) % post_ring.size()]) ? post_still + 1 : 0;
+    // for Tp cycles). Ring indices by compare, not `%` (two divisions per cycle).
+    const std::size_t n = post_ring.size();
+    const std::size_t prev = post_pos == 0 ? n - 1 : post_pos - 1;
+    post_still = (p == post_ring[prev]) ? post_still + 1 : 0;
     post_sum = post_sum + (p - post_ring[post_pos]);
     post_ring[post_pos] = p;
-    post_pos = (post_pos + 1) % post_ring.size();
-    position = post_still >= lim.post_cycles
-                   ? p
-                   : (1.0 / static_cast<double>(post_ring.size())) * post_sum;
+    post_pos = post_pos + 1 == n ? 0 : post_pos + 1;
+    position = post_still >= lim.post_cycles ? p : (1.0 / static_cast<double>(n)) * post_sum;
+    return position;
   }
 
   // The channels fill() does not set, at their defaults (as Sample{} has them). Assigning them
@@ -298,11 +306,14 @@ struct Kernel::Impl {
     out.aux_p = 0;
   }
 
-  void fill(Sample& out, double speed_pc) const {
+  // cur: the item under the tool (nullptr: none); pos, path: this cycle's position and
+  // path_position.
+  void fill(Sample& out, const Segment* cur, const AxisVec& pos, const AxisVec& path,
+            double speed_pc) const {
     out.t_s = static_cast<double>(cycle) * lim.period_s;
-    out.line = (buf.empty() || out_idx >= buf.end_index()) ? 0 : buf[out_idx].line;
-    out.position = position;
-    out.path_position = path_position;
+    out.line = cur == nullptr ? 0 : cur->line;
+    out.position = pos;
+    out.path_position = path;
     out.feed_mm_min = speed_pc / lim.period_s * 60.0;
     out.override_pct = override_pct;
     out.correction = correction_now;
@@ -327,7 +338,7 @@ struct Kernel::Impl {
     if (!started) {
       started = true;
       out = Sample{};
-      fill(out, 0);
+      fill(out, current(), position, path_position, 0);
       return true;
     }
     if (all_done()) return false;
@@ -345,14 +356,17 @@ struct Kernel::Impl {
     clear_events(out);
     const double tool = ma != nullptr ? ma->tool_mm() : acc.tool_mm();
     advance_output(tool, out);
-    path_position = interpolate(tool);
-    if (out_idx < buf.end_index() && !buf.empty() && buf[out_idx].kind == ItemKind::kMotion) {
-      correction_now = buf[out_idx].correction;  // spec 03: C of the segment under the tool
+    // retire() below drops only items before out_idx: cur stays valid for fill().
+    const Segment* cur = current();
+    const AxisVec path = interpolate(cur, tool);
+    path_position = path;
+    if (cur != nullptr && cur->kind == ItemKind::kMotion) {
+      correction_now = cur->correction;  // spec 03: C of the segment under the tool
     }
-    post_filter(path_position);
+    const AxisVec pos = post_filter(path);
     // Once the program has ended the producer stops asking wants_block(): retire here then.
     if (ended) retire();
-    fill(out, ma != nullptr ? ma->tool_speed_pc() : acc.tool_speed_pc());
+    fill(out, cur, pos, path, ma != nullptr ? ma->tool_speed_pc() : acc.tool_speed_pc());
     return true;
   }
 
@@ -370,9 +384,12 @@ struct Kernel::Impl {
   bool have_motion = false;
   bool barrier_since_motion = false;
   std::uint64_t last_motion = 0;
-  std::vector<std::uint64_t> barriers;  // unprocessed stop events, in order (fixed ring)
+  // Rings sized by the window (huge_pages.hpp: cheap to touch at construction).
+  template <typename T>
+  using Ring = std::vector<T, planner::HugePageAllocator<T>>;
+  Ring<std::uint64_t> barriers;  // unprocessed stop events, in order (fixed ring)
   std::size_t bq_head = 0, bq_size = 0;
-  std::vector<std::uint64_t> events;  // indices of event items not yet passed (fixed ring)
+  Ring<std::uint64_t> events;  // indices of event items not yet passed (fixed ring)
   std::size_t ev_head = 0, ev_size = 0;
 
   bool ended = false, started = false, hold = false;

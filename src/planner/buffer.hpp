@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "planner/huge_pages.hpp"
 #include "planner/segment.hpp"
 
 namespace cncore::planner {
@@ -79,9 +80,10 @@ class SegmentBuffer {
   }
 
  private:
-  std::vector<Segment> items_;
+  // Allocated from huge pages (huge_pages.hpp): ~3.3 MB for a 10 000-block window.
+  std::vector<Segment, HugePageAllocator<Segment>> items_;
   // end_mm() of every slot: seek() probes 8 bytes per item instead of a cold ~330-byte Segment.
-  std::vector<double> end_mm_;
+  std::vector<double, HugePageAllocator<double>> end_mm_;
   std::uint64_t cap_;
   std::uint64_t begin_ = 0, end_ = 0;
   std::uint64_t begin_slot_ = 0;  // begin_ % cap_

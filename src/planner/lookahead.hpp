@@ -44,6 +44,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "planner/huge_pages.hpp"
 #include "planner/min_tree.hpp"
 
 namespace cncore::planner {
@@ -93,8 +94,8 @@ class Lookahead {
   void enter_range(std::size_t slot);
 
   double or_max_;
-  std::vector<CapPoint> points_;
-  std::vector<State> state_;
+  std::vector<CapPoint, HugePageAllocator<CapPoint>> points_;
+  std::vector<State, HugePageAllocator<State>> state_;
   MinTree w_, r_, geo_, feed_, release_;
 };
 

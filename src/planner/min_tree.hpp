@@ -13,6 +13,8 @@
 #include <limits>
 #include <vector>
 
+#include "planner/huge_pages.hpp"
+
 namespace cncore::planner {
 
 class MinTree {
@@ -85,9 +87,9 @@ class MinTree {
 
  private:
   std::size_t size_;
-  std::vector<std::size_t> offset_;  // start of each level in storage_
-  std::size_t top_ = 0;              // the root's level
-  std::vector<double> storage_;
+  std::vector<std::size_t> offset_;                         // start of each level in storage_
+  std::size_t top_ = 0;                                     // the root's level
+  std::vector<double, HugePageAllocator<double>> storage_;  // huge_pages.hpp: cheap to touch
 };
 
 // `width` tournament trees over the same leaves, stored node-major (node k holds the width
@@ -141,7 +143,7 @@ class MinTreeRows {
   }
 
   std::size_t size_, width_;
-  std::vector<double> nodes_;
+  std::vector<double, HugePageAllocator<double>> nodes_;
 };
 
 }  // namespace cncore::planner

@@ -67,19 +67,6 @@ Limits make_limits(const MachineConfig& m, bool bound_resultant) {
   return l;
 }
 
-AxisVec Segment::point_at(double u_mm) const {
-  if (u_mm >= length_mm) return end;
-  if (u_mm <= 0) return start;
-  const double f = u_mm / length_mm;
-  AxisVec p = start + f * (end - start);
-  if (arc) {
-    const double phi = f * sweep_rad;
-    const double r = r0 + (r1 - r0) * f;
-    p.set_xyz(center + (r * std::cos(phi)) * e1 + (r * std::sin(phi)) * e2 + (rise_mm * f) * n);
-  }
-  return p;
-}
-
 AxisVec Segment::direction_at(double phi) const {
   AxisVec d = (1.0 / length_mm) * (end - start);
   if (arc) {

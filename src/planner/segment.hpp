@@ -9,6 +9,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -82,6 +83,21 @@ struct Segment {
  private:
   AxisVec direction_at(double phi) const;
 };
+
+// Inline: the motion cycle calls it once per cycle, and a call returns the 48-byte point
+// through memory (the caller's reload of it stalled on store forwarding).
+inline AxisVec Segment::point_at(double u_mm) const {
+  if (u_mm >= length_mm) return end;
+  if (u_mm <= 0) return start;
+  const double f = u_mm / length_mm;
+  AxisVec p = start + f * (end - start);
+  if (arc) {
+    const double phi = f * sweep_rad;
+    const double r = r0 + (r1 - r0) * f;
+    p.set_xyz(center + (r * std::cos(phi)) * e1 + (r * std::sin(phi)) * e2 + (rise_mm * f) * n);
+  }
+  return p;
+}
 
 // Builds a motion segment (kRapid, kLine, kArc) with its length and Vb. Zero-length moves give
 // length 0 (the caller drops them).
