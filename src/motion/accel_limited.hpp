@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "core/geometry.hpp"
@@ -191,6 +192,24 @@ class AccelLimitedAccDec final : public AccDec {
   static constexpr std::size_t kCarries = 8;
   std::array<Carry, kCarries> carries_{};
   std::size_t n_carries_ = 0;
+
+  // Late blocks with a filter (6., 8.): a block that arrives while the commanded position is
+  // within the filter's reach of its start is held: the tool stops at hold_mm_ (the window's
+  // end it was braking for) and settles, and only then do the caps of the blocks that arrived
+  // meanwhile (pending_, in arrival order) take effect.
+  bool late_hold_ = false;
+  double hold_mm_ = 0;
+  std::uint32_t rest_cycles_ = 0;  // cycles in a row that started with the tool at rest
+  std::vector<double> recent_;     // the commanded steps of the last lag_ cycles (ring)
+  std::size_t recent_pos_ = 0;
+  std::vector<std::pair<std::size_t, Cap>> pending_;
+  // Set by on_segment() when the commanded position is near enough to the new block's start for
+  // one of its caps to bind at once: the last cycle's σ and the largest recent step.
+  bool late_check_ = false;
+  double late_sigma_p_ = 0, late_m_ = 0, late_at_mm_ = 0;
+  bool late_cap(const Cap& cap) const;
+  void start_hold(double at_mm);
+  void release_hold();
 };
 
 }  // namespace cncore::motion

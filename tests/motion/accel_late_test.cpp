@@ -210,9 +210,9 @@ TEST(AccelLate, CornersArrivingLateKeepSlowAxisLimits) {
 }
 
 // A slower feed arriving late, straight on and at a 30° corner: the feed cap reaches lag·F
-// behind the joint.
+// behind the joint. F60 is 1 µm/cycle, below A0 = 2 µm/cycle² (6.: the tail's last steps).
 TEST(AccelLate, SlowerFeedArrivingLateKeepsEveryLimit) {
-  for (double feed : {2000.0, 300.0}) {
+  for (double feed : {2000.0, 300.0, 60.0}) {
     sweep_late(corner(0, feed), 1, "straight on at F" + std::to_string(feed));
     sweep_late(corner(30, feed), 1, "30 deg at F" + std::to_string(feed));
   }
