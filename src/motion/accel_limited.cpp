@@ -281,7 +281,6 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
   }
   tail_cap_pc_ *= 0.5;
   recent_.assign(std::max<std::size_t>(1, static_cast<std::size_t>(lag_)), 0.0);
-  pending_.reserve(4 * buffer.capacity() + 8);
 }
 
 double AccelLimitedAccDec::segment_accel_pc2(std::uint64_t index) const {
@@ -1051,10 +1050,12 @@ bool AccelLimitedAccDec::late_cap(const Cap& cap) const {
 void AccelLimitedAccDec::start_hold(double at_mm) {
   late_hold_ = true;
   hold_mm_ = at_mm;
+  rest_cycles_ = 0;
 }
 
 void AccelLimitedAccDec::release_hold() {
   late_hold_ = false;
+  late_check_ = false;  // (the inserts below are not a block's arrival)
   for (auto& [pos, cap] : pending_) {
     // σ ahead may have moved since (joint zones of later blocks): keys with the exact σ(c), 7.
     cap.sigma_c = sigma_at(cap.c_mm);
@@ -1069,13 +1070,14 @@ void AccelLimitedAccDec::release_hold() {
 
 void AccelLimitedAccDec::step(const CycleInput& cycle) {
   CycleInput in = cycle;
-  late_check_ = false;  // (a push's checks end with it)
-  rest_cycles_ = at_rest() ? rest_cycles_ + 1 : 0;
-  recent_[recent_pos_] = step_;
-  recent_pos_ = recent_pos_ + 1 == recent_.size() ? 0 : recent_pos_ + 1;
+  if (lag_ > 0) {
+    recent_[recent_pos_] = step_;  // (6.: the steps the filter may still hold)
+    recent_pos_ = recent_pos_ + 1 == recent_.size() ? 0 : recent_pos_ + 1;
+  }
   if (late_hold_) {
     // A held late block (6.) is released once the tool has been at rest at hold_mm_ for the
     // post filter's length (its output is then hold_mm_ too); until then hold_mm_ is a stop.
+    rest_cycles_ = at_rest() ? rest_cycles_ + 1 : 0;
     const std::uint32_t settle = lim_.post_filter() ? lim_.post_cycles : 0;
     if (pos_mm_ >= hold_mm_ && rest_cycles_ > settle) release_hold();
     if (late_hold_) in.stop_mm = std::min(in.stop_mm, hold_mm_);
