@@ -353,9 +353,13 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   // its step at once (or, active at once, below the steps still in the filter) holds it.
   late_check_ = false;
   if (!late_hold_) {
-    const double a_lo = a0_ * std::min(1.0, r_zone_.min());
-    const double near_mm =
-        (2 + lag_) * vtop_pc_ * or_max_ + step_ * step_ / (2 * a_lo) + 2 * step_ + a0_;
+    // Every cap it brings starts at or after s0 − (2 + lag)·v_hi (joint caps: (1 + lag)·Vg, and a
+    // lattice cap's entry V before that; Vg ≤ the faster side's cap). From c − p ≥ d/r_lo,
+    // σ(c) − σ_p ≥ d = u²/(2·A0) + u + A0 and both key forms (3.) give a bound ≥ u there.
+    const double v_hi =
+        std::max({vcap, s.feed_pc * or_max_, have_prev_ ? vcap_[buf_.slot(prev_index_)] : 0.0});
+    const double r_lo = std::max(1e-6, std::min(1.0, r_zone_.min()));
+    const double near_mm = (2 + lag_) * v_hi + (step_ * step_ / (2 * a0_) + step_ + a0_) / r_lo;
     if (pos_mm_ + near_mm >= s.s0_mm) {
       late_m_ = step_;
       for (const double x : recent_) late_m_ = std::max(late_m_, x);

@@ -242,6 +242,23 @@ TEST(AccelLate, ArcsArrivingLateKeepEveryLimit) {
   }
 }
 
+// Found by the property below (no filter, slow X/Y): a 0.1 mm arc in XY, then a helix about X
+// (R 0.1 mm, one extra turn) arriving while the tool brakes for the arc's end. The test whether
+// the tool is near enough for a late cap to bind looked only lag·V back: with no filter it saw
+// nothing, and arriving at cycles 10–20 drove Y to 956 mm/s² (limit 800).
+TEST(AccelLate, HelixArrivingLateAfterAShortArcKeepsTheSlowAxis) {
+  const MachineConfig m = machine_for(Filter{0, 0}, true);
+  Prog p;
+  p.arc_to(Vec3{-0.010190036479384323, -0.10582757509949886, 0}, Vec3{-0.55462571295791074, 0, 0},
+           6000, Vec3{0, 0, -1});
+  p.arc_to(Vec3{-4.0101900364793845, -0.10582757509949886, 0},
+           Vec3{-0.010190036479384323, -0.20582757509949887, 0}, 6000, Vec3{1, 0, 0}, 1);
+  p.blocks.back().path_mode = PathMode::kExactStop;
+  for (std::uint64_t at : {0, 5, 10, 15, 18, 19, 20, 21, 25}) {
+    run_checked_late(m, p.blocks, 1, at, "helix after a short arc");
+  }
+}
+
 // Random short programs (lines down to 1 µm, arcs, helices, rapids, exact stops, dwells), each
 // block arriving at a random cycle (often while the tool brakes for the end of the one before),
 // with a jerk stage of 200, 40 or 4 cycles (or none), slow X/Y or every axis at Amax. Not with
