@@ -367,18 +367,21 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
       late_at_mm_ = s.s0_mm;
     }
   }
+  n_late_range_ = 0;
   if (late_check_) {
     late_sigma_p_ = sigma_at(pos_mm_);
     const double v[2] = {vcap, s.feed_pc};
     const double reach_k[2] = {lag_ * vcap, lag_ * s.feed_pc * or_max_};
-    for (std::size_t k = 0; k < 2 && !late_hold_; ++k) {
+    for (std::size_t k = 0; k < 2; ++k) {
       // The same limit as the previous segment extends its cap: nothing new (see below).
       const std::size_t from = 3 * buf_.slot(prev_index_) + k;
       if (contiguous && owner_[from] != kNone && caps_[owner_[from]].v == v[k]) continue;
       const double c = s.s0_mm - reach_k[k];
-      const Cap cap{c, s.end_mm() + reach_k[k], v[k], sigma_at(c), k == 1, k == 0 && vcap >= a0_};
-      if (late_cap(cap)) start_hold(s.s0_mm);
+      late_range_[n_late_range_++] = {c,      s.end_mm() + reach_k[k], v[k], 0,
+                                      k == 1, k == 0 && vcap >= a0_};
     }
+    // At a joint, joint_zones() tests them with the σ its zone will leave.
+    if (!joint) check_late(s.s0_mm, 0, 1, nullptr);
   }
   if (joint) joint_zones(prev_index_, slot, s);
   update_r(index);
@@ -882,28 +885,29 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   zone_vg_ = vj;
   zone_joint_pc_ = corner;
   zone_index_a_ = index_a;
-  if (late_check_ && !late_hold_) {
-    // The joint cap on_joint() will set (6.): late when it binds at once.
-    const double vg = std::min({corner, around, vj});
-    if (vg < 0.999 * around) {
-      const double w = vg * (1 + lag_), c = a.end_mm() - w;
-      Cap cap{c, a.end_mm() + w, vg, sigma_at(c), false, vg >= a0_};
-      if (!cap.lattice && vg >= 0.5 * a0_) {
-        cap.lattice = cap.sigma_c - sigma_at(c - vg) >= 0.5 * vg;
-      }
-      if (late_cap(cap)) start_hold(a.end_mm());
-    }
-  }
   const double rj = std::max(d / a0_, 1e-6);
-  if (rj >= r_hi) return;  // the segments' own r already fits
   // Every step within V of the joint is ≤ V: the joint cap's Vg when there is one, else the
   // segments' caps.
   const double v = vj < 0.999 * around ? vj : around;
+  const double zone_from = a.end_mm() - (2 + lag_) * v;
+  if (late_check_ && !late_hold_) {
+    // The block's range caps and the joint cap on_joint() will set (6.), with σ(c) no higher
+    // than the zone below leaves it (r ≥ min(r_lo, r_j) over [zone start, c]).
+    Cap joint_cap{0, 0, 0, 0, false, false};
+    const double vg = std::min({corner, around, vj});
+    if (vg < 0.999 * around) {
+      const double w = vg * (1 + lag_);
+      joint_cap = {a.end_mm() - w, a.end_mm() + w, vg, 0, false, vg >= a0_};
+    }
+    check_late(a.end_mm(), std::max(zone_from, pos_mm_), rj < r_hi ? rj : 1,
+               vg < 0.999 * around ? &joint_cap : nullptr);
+  }
+  if (rj >= r_hi) return;  // the segments' own r already fits
   // The zone [j − 2V, j] may reach back over several short segments (at most kZoneWalk): each
   // gets it as (part of) its tail zone. Never under or behind the tool (σ there is in use; a
   // late joint, see 6.).
   // (While a late block is held the tool stops at hold_mm_: no zone behind it.)
-  const double zone_start = std::max(a.end_mm() - (2 + lag_) * v, late_hold_ ? hold_mm_ : pos_mm_);
+  const double zone_start = std::max(zone_from, late_hold_ ? hold_mm_ : pos_mm_);
   std::uint64_t first = index_a + 1;
   std::size_t walked = 0;
   for (std::uint64_t k = index_a + 1;
@@ -1049,6 +1053,32 @@ bool AccelLimitedAccDec::late_cap(const Cap& cap) const {
   }
   const double v = cap.feed ? static_cast<double>(level_of(or_ratio)) * level_step_ * cap.v : cap.v;
   return brake(v * v + k_sigma, late_sigma_p_) < step_;
+}
+
+void AccelLimitedAccDec::check_late(double at_mm, double zone_mm, double zone_r,
+                                    const Cap* joint_cap) {
+  // σ(c) as the joint zone [zone_mm, at_mm] of rate zone_r (1: none) will leave it, or lower.
+  const double r_lo = std::min({1.0, r_zone_.min(), zone_r});
+  const double sigma_zone = zone_r < 1 ? sigma_at(zone_mm) : 0;
+  auto sigma_c = [&](double c) {
+    const double sc = sigma_at(c);
+    return zone_r < 1 && c > zone_mm ? std::min(sc, sigma_zone + r_lo * (c - zone_mm)) : sc;
+  };
+  for (std::size_t k = 0; k < n_late_range_ && !late_hold_; ++k) {
+    Cap cap = late_range_[k];
+    cap.sigma_c = sigma_c(cap.c_mm);
+    if (late_cap(cap)) start_hold(at_mm);
+  }
+  if (joint_cap != nullptr && !late_hold_) {
+    Cap cap = *joint_cap;
+    cap.sigma_c = sigma_c(cap.c_mm);
+    bool binds = late_cap(cap);
+    if (!cap.lattice && cap.v >= 0.5 * a0_) {
+      cap.lattice = true;  // insert_joint_cap() may choose either form here (3.): test both
+      binds = binds || late_cap(cap);
+    }
+    if (binds) start_hold(at_mm);
+  }
 }
 
 void AccelLimitedAccDec::start_hold(double at_mm) {

@@ -207,7 +207,12 @@ class AccelLimitedAccDec final : public AccDec {
   // one of its caps to bind at once: the last cycle's σ and the largest recent step.
   bool late_check_ = false;
   double late_sigma_p_ = 0, late_m_ = 0, late_at_mm_ = 0;
+  Cap late_range_[2];  // the new block's range caps that are not extensions of earlier ones
+  std::size_t n_late_range_ = 0;
   bool late_cap(const Cap& cap) const;
+  // Tests late_range_ and the joint's cap (null: none); zone_r < 1: a joint zone of that rate
+  // will cover [zone_mm, at_mm] (7.), which lowers σ there.
+  void check_late(double at_mm, double zone_mm, double zone_r, const Cap* joint_cap);
   void start_hold(double at_mm);
   void release_hold();
 };
