@@ -259,6 +259,21 @@ TEST(AccelLate, HelixArrivingLateAfterAShortArcKeepsTheSlowAxis) {
   }
 }
 
+// Found by the property below (T2 = 4, slow X/Y): a 1 µm rapid with an exact stop, turned 14°,
+// arriving while the tool brakes for the first rapid's end. No cap of it binds, but its joint
+// zone (7.) lowers r ahead of the tool, so σ up to the new stop shrank under the braking tool:
+// Y 960 mm/s² (limit 800) when it arrived at cycle 60.
+TEST(AccelLate, TinyRapidArrivingLateAtAGentleCornerKeepsTheSlowAxis) {
+  const MachineConfig m = machine_for(Filter{1e6, 0}, true);
+  Prog p;
+  p.rapid_to(Vec3{0.40255841794763941, 0.7539249215833751, 0.034825020817244139});
+  p.rapid_to(Vec3{0.40317597153530021, 0.7547040802981998, 0.03471759985336853});
+  p.blocks.back().path_mode = PathMode::kExactStop;
+  for (std::uint64_t at : {0, 40, 50, 55, 58, 59, 60, 61, 62, 65}) {
+    run_checked_late(m, p.blocks, 1, at, "tiny rapid at 14 deg");
+  }
+}
+
 // Random short programs (lines down to 1 µm, arcs, helices, rapids, exact stops, dwells), each
 // block arriving at a random cycle (often while the tool brakes for the end of the one before),
 // with a jerk stage of 200, 40 or 4 cycles (or none), slow X/Y or every axis at Amax. Not with
