@@ -274,6 +274,22 @@ TEST(AccelLate, TinyRapidArrivingLateAtAGentleCornerKeepsTheSlowAxis) {
   }
 }
 
+// Found by the property below (no filter): a 1 µm rapid between a near-reversal and an 8° turn,
+// the rapid after it arriving while the tool brakes: its joint zone lowered σ ahead of the tool
+// and on_joint()'s cap for both corners in one cycle then held the block at the old stop, whose
+// bound had dropped: 2 011.7 mm/s² (A 2 000) when it arrived at cycle 5.
+TEST(AccelLate, RapidAfterAMicronSegmentArrivingLateKeepsTheLimit) {
+  const MachineConfig m = machine_for(Filter{0, 0});
+  Prog p;
+  p.rapid_to(Vec3{0.019387320112476486, 0, 0});
+  p.rapid_to(Vec3{0.018382668887250288, -0.00035774020953447885, -3.6619858409704351e-05});
+  p.rapid_to(Vec3{0.0089173622413837358, -0.0024561481732018418, -0.00035259361227054807});
+  p.blocks.back().path_mode = PathMode::kExactStop;
+  for (std::uint64_t at : {0, 2, 3, 4, 5, 6, 7, 8, 10}) {
+    run_checked_late(m, p.blocks, 2, at, "rapid after a 1 um segment");
+  }
+}
+
 // Random short programs (lines down to 1 µm, arcs, helices, rapids, exact stops, dwells), each
 // block arriving at a random cycle (often while the tool brakes for the end of the one before),
 // with a jerk stage of 200, 40 or 4 cycles (or none), slow X/Y or every axis at Amax. Not with
