@@ -98,21 +98,30 @@
 //    passed at 5× their Vg with a 200-cycle jerk stage (normal 10 769 mm/s²), 0.022 mm of
 //    rounding for a 0.01 mm tolerance, and without a filter on slow X/Y a late 30° corner braked
 //    an r = 0.8 line at A0 (X 1 740 > 1 500 mm/s²).
-//    So on_segment() tests the block's range caps and its joint's cap before anything is
-//    attached (late_cap(): active at once with V below the largest commanded step of the last
-//    lag cycles; approaching with its bound at the commanded position below the last step —
-//    from at or above it, following it needs ≤ r·A0 per cycle, 3. (ii)). If one binds, the block
-//    is *held*: the window's end it arrived at (hold_mm_) stays a stop, the caps of every block
-//    arriving meanwhile wait in pending_ (and no joint zone reaches behind hold_mm_), and once
-//    the tool has been at rest there for the post filter's length they are inserted with the
-//    σ(c) of then. The tool starts from rest with an empty filter, so every cap holds from there
-//    on as in 1.–8. A late block that binds costs a stop at the window's end; blocks in time, and
-//    late ones whose caps it can still follow, are attached as before (same samples:
-//    bench_motion --digest). What makes the usual late block followable: the last
-//    V_t = min(A0, a_i)/2 before every stop (V_t is the lowest corner cap, a reversal's) is run at
-//    ≤ V_t, and the lattice's steps landing within V_t of the stop are ≤ V_t.
-//    Not covered: the hold's release inserts every pending cap in one cycle (O(n log n) once,
-//    after the tool has stopped).
+//    So a block's range caps and its joint's cap are tested before anything is attached
+//    (check_late(), from on_segment() or, at a joint, from joint_zones() before its zone is
+//    applied, with σ(c) as low as the zone may leave it; late_cap(): active at once with V below
+//    the largest commanded step of the last lag cycles, or approaching with its bound at the
+//    commanded position below the last step — from at or above it, following it needs ≤ r·A0
+//    per cycle, 3. (ii)), and so is the stop at the joint when the joint's zone (7.) lowers σ
+//    ahead of the tool (its lattice bound must still allow the last step; found: a zone ahead of
+//    a 1 µm segment gave 2 011.7 mm/s²); insert() tests what these did not foresee (on_joint()'s
+//    cap for two corners in one cycle). Only when the tool is near enough for anything to bind:
+//    every cap starts at or after s0 − (2 + lag)·v_hi, and from c − p ≥ (u²/(2·A0) + u + A0)/r_lo
+//    on no key bound is below the step u. If one binds, the block is *held*: the window's end it
+//    arrived at (hold_mm_) stays a stop, the caps of every block arriving meanwhile wait in
+//    pending_ (and no joint zone reaches behind hold_mm_), and once the tool has been at rest
+//    there for the post filter's length they are inserted with the σ(c) of then. The tool
+//    starts from rest with an empty filter, so every cap holds from there on as in 1.–8.
+//    A held block costs the rest of the stop and the filter's span (corner arriving during the
+//    braking: +7 cycles without a filter, +21 with Tp = 16, +32 with T2 = 40, +191 with T2 = 200
+//    and Tp = 16 against the old, violating runs; at most 10 cycles more than the same block in
+//    time). Blocks in time, and late ones whose caps it can still follow, are attached as before
+//    (same samples: bench_motion --digest). What makes the usual late block followable: the
+//    last V_t = min(A0, a_i)/2 before every stop (V_t is the lowest corner cap, a reversal's) is
+//    run at ≤ V_t, and the lattice's steps landing within V_t of the stop are ≤ V_t.
+//    Not covered: the hold's release inserts every pending cap in one cycle, O(k log n) for the
+//    k blocks that arrived during the hold (once, with the tool at rest), not O(log n).
 //
 // 7. Joint zones: a turn and a speed change in the same cycles. Samples P[k] = p(s_k) on a path
 //    with one corner at j (unit tangents E before, S after), steps u1 = s_k − s_{k−1} and

@@ -4,7 +4,9 @@
 // (T2) and/or the post-interpolation filter (Tp) the output averages the commanded steps of the
 // last lag = T2 + Tp cycles, so the caps of the late block (a corner, a slower feed, an arc) reach
 // lag·V behind their position — possibly behind the commanded position, over steps that are
-// already in the filter. Everything is measured on the produced positions by the independent
+// already in the filter. Without a filter too (the first filter of each sweep; 6.): a late cap's
+// key may bind below the braking tool's step. Everything is measured on the produced positions by
+// the independent
 // checker (tests/support): path speed and joint speed, tangential/normal/per-axis acceleration,
 // tangential jerk, distance to the programmed path, end point.
 #include <gtest/gtest.h>
