@@ -6,9 +6,8 @@
 // lag·V behind their position — possibly behind the commanded position, over steps that are
 // already in the filter. Without a filter too (the first filter of each sweep; 6.): a late cap's
 // key may bind below the braking tool's step. Everything is measured on the produced positions by
-// the independent
-// checker (tests/support): path speed and joint speed, tangential/normal/per-axis acceleration,
-// tangential jerk, distance to the programmed path, end point.
+// the independent checker (tests/support): path speed and joint speed, tangential/normal/per-axis
+// acceleration, tangential jerk, distance to the programmed path, end point.
 #include <gtest/gtest.h>
 #include <rapidcheck.h>
 #include <rapidcheck/gtest.h>
