@@ -675,6 +675,68 @@ void AccelLimitedAccDec::carry(double until_mm, double r) {
   carries_[n_carries_++] = {until_mm, r};
 }
 
+bool AccelLimitedAccDec::late_cap(const Cap& cap) const {
+  const double or_ratio = cap.feed ? prev_or_ : 1.0;
+  // Active at once: every step still in the filter must be within it.
+  if (pos_mm_ >= entry_mm(cap)) return or_ratio * cap.v < late_m_;
+  // Approaching: its braking bound at the commanded position (3.) must allow the last step,
+  // from which following it needs no more than r·A0 per cycle (3. (ii)).
+  const double k_sigma = 2 * a0_ * cap.sigma_c;
+  if (cap.lattice) {
+    const double h = cap.v - 0.5 * a0_;
+    return lattice(h * h + k_sigma, late_sigma_p_) < step_;
+  }
+  const double v = cap.feed ? static_cast<double>(level_of(or_ratio)) * level_step_ * cap.v : cap.v;
+  return brake(v * v + k_sigma, late_sigma_p_) < step_;
+}
+
+void AccelLimitedAccDec::check_late(double at_mm, double zone_mm, double zone_r,
+                                    const Cap* joint_cap) {
+  // σ(c) as the joint zone [zone_mm, at_mm] of rate zone_r (1: none) will leave it, or lower.
+  const double r_lo = std::min({1.0, r_zone_.min(), zone_r});
+  const double sigma_zone = zone_r < 1 ? sigma_at(zone_mm) : 0;
+  auto sigma_c = [&](double c) {
+    const double sc = sigma_at(c);
+    return zone_r < 1 && c > zone_mm ? std::min(sc, sigma_zone + r_lo * (c - zone_mm)) : sc;
+  };
+  for (std::size_t k = 0; k < n_late_range_ && !late_hold_; ++k) {
+    Cap cap = late_range_[k];
+    cap.sigma_c = sigma_c(cap.c_mm);
+    if (late_cap(cap)) start_hold(at_mm);
+  }
+  if (joint_cap != nullptr && !late_hold_) {
+    Cap cap = *joint_cap;
+    cap.sigma_c = sigma_c(cap.c_mm);
+    bool binds = late_cap(cap);
+    if (!cap.lattice && cap.v >= 0.5 * a0_) {
+      cap.lattice = true;  // insert_joint_cap() may choose either form here (3.): test both
+      binds = binds || late_cap(cap);
+    }
+    if (binds) start_hold(at_mm);
+  }
+}
+
+void AccelLimitedAccDec::start_hold(double at_mm) {
+  late_hold_ = true;
+  hold_mm_ = at_mm;
+  rest_cycles_ = 0;
+}
+
+void AccelLimitedAccDec::release_hold() {
+  late_hold_ = false;
+  late_check_ = false;  // (the inserts below are not a block's arrival)
+  for (auto& [pos, cap] : pending_) {
+    // σ ahead may have moved since (joint zones of later blocks): keys with the exact σ(c), 7.
+    cap.sigma_c = sigma_at(cap.c_mm);
+    if (pos % 3 == 2 && cap.v < a0_) {
+      cap.lattice = cap.v >= 0.5 * a0_ && cap.sigma_c - sigma_at(cap.c_mm - cap.v) >= 0.5 * cap.v;
+    }
+    insert(pos, cap);  // in arrival order: a later cap at the same position replaces it
+  }
+  pending_.clear();
+  cached_stop_mm_ = -1;
+}
+
 void AccelLimitedAccDec::advance_current() {
   if (buf_.empty()) return;
   cur_ = std::max(cur_, buf_.begin_index());
@@ -1060,83 +1122,29 @@ double AccelLimitedAccDec::reference_bound(double or_ratio) const {
   return out;
 }
 
-bool AccelLimitedAccDec::late_cap(const Cap& cap) const {
-  const double or_ratio = cap.feed ? prev_or_ : 1.0;
-  // Active at once: every step still in the filter must be within it.
-  if (pos_mm_ >= entry_mm(cap)) return or_ratio * cap.v < late_m_;
-  // Approaching: its braking bound at the commanded position (3.) must allow the last step,
-  // from which following it needs no more than r·A0 per cycle (3. (ii)).
-  const double k_sigma = 2 * a0_ * cap.sigma_c;
-  if (cap.lattice) {
-    const double h = cap.v - 0.5 * a0_;
-    return lattice(h * h + k_sigma, late_sigma_p_) < step_;
-  }
-  const double v = cap.feed ? static_cast<double>(level_of(or_ratio)) * level_step_ * cap.v : cap.v;
-  return brake(v * v + k_sigma, late_sigma_p_) < step_;
-}
-
-void AccelLimitedAccDec::check_late(double at_mm, double zone_mm, double zone_r,
-                                    const Cap* joint_cap) {
-  // σ(c) as the joint zone [zone_mm, at_mm] of rate zone_r (1: none) will leave it, or lower.
-  const double r_lo = std::min({1.0, r_zone_.min(), zone_r});
-  const double sigma_zone = zone_r < 1 ? sigma_at(zone_mm) : 0;
-  auto sigma_c = [&](double c) {
-    const double sc = sigma_at(c);
-    return zone_r < 1 && c > zone_mm ? std::min(sc, sigma_zone + r_lo * (c - zone_mm)) : sc;
-  };
-  for (std::size_t k = 0; k < n_late_range_ && !late_hold_; ++k) {
-    Cap cap = late_range_[k];
-    cap.sigma_c = sigma_c(cap.c_mm);
-    if (late_cap(cap)) start_hold(at_mm);
-  }
-  if (joint_cap != nullptr && !late_hold_) {
-    Cap cap = *joint_cap;
-    cap.sigma_c = sigma_c(cap.c_mm);
-    bool binds = late_cap(cap);
-    if (!cap.lattice && cap.v >= 0.5 * a0_) {
-      cap.lattice = true;  // insert_joint_cap() may choose either form here (3.): test both
-      binds = binds || late_cap(cap);
-    }
-    if (binds) start_hold(at_mm);
-  }
-}
-
-void AccelLimitedAccDec::start_hold(double at_mm) {
-  late_hold_ = true;
-  hold_mm_ = at_mm;
-  rest_cycles_ = 0;
-}
-
-void AccelLimitedAccDec::release_hold() {
-  late_hold_ = false;
-  late_check_ = false;  // (the inserts below are not a block's arrival)
-  for (auto& [pos, cap] : pending_) {
-    // σ ahead may have moved since (joint zones of later blocks): keys with the exact σ(c), 7.
-    cap.sigma_c = sigma_at(cap.c_mm);
-    if (pos % 3 == 2 && cap.v < a0_) {
-      cap.lattice = cap.v >= 0.5 * a0_ && cap.sigma_c - sigma_at(cap.c_mm - cap.v) >= 0.5 * cap.v;
-    }
-    insert(pos, cap);  // in arrival order: a later cap at the same position replaces it
-  }
-  pending_.clear();
-  cached_stop_mm_ = -1;
-}
-
-void AccelLimitedAccDec::step(const CycleInput& cycle) {
-  CycleInput in = cycle;
-  if (lag_ > 0) {
-    recent_[recent_pos_] = step_;  // (6.: the steps the filter may still hold)
-    recent_pos_ = recent_pos_ + 1 == recent_.size() ? 0 : recent_pos_ + 1;
-  }
-  if (late_hold_) {
-    // A held late block (6.) is released once the tool has been at rest at hold_mm_ for the
-    // post filter's length (its output is then hold_mm_ too); until then hold_mm_ is a stop.
-    rest_cycles_ = at_rest() ? rest_cycles_ + 1 : 0;
-    const std::uint32_t settle = lim_.post_filter() ? lim_.post_cycles : 0;
-    if (pos_mm_ >= hold_mm_ && rest_cycles_ > settle) release_hold();
-    if (late_hold_) in.stop_mm = std::min(in.stop_mm, hold_mm_);
-  }
+void AccelLimitedAccDec::step(const CycleInput& in) {
   advance_current();
+  if (!held_cycle_) {
+    if (lag_ > 0) {
+      recent_[recent_pos_] = step_;  // (6.: the steps the filter may still hold)
+      recent_pos_ = recent_pos_ + 1 == recent_.size() ? 0 : recent_pos_ + 1;
+    }
+    if (late_hold_) {
+      // A held late block (6.) is released once the tool has been at rest at hold_mm_ for the
+      // post filter's length (its output is then hold_mm_ too); until then hold_mm_ is a stop.
+      rest_cycles_ = at_rest() ? rest_cycles_ + 1 : 0;
+      const std::uint32_t settle = lim_.post_filter() ? lim_.post_cycles : 0;
+      if (pos_mm_ >= hold_mm_ && rest_cycles_ > settle) release_hold();
+      if (late_hold_ && in.stop_mm > hold_mm_) {
+        CycleInput held = in;
+        held.stop_mm = hold_mm_;
+        held_cycle_ = true;
+        step(held);
+        held_cycle_ = false;
+        return;
+      }
+    }
+  }
   // Caps whose range the tool has entered, then caps it has left.
   while (entry_.min() <= pos_mm_) activate(entry_.argmin());
   // (release_ may hold an active cap's earlier end, ≤ its e: on_segment() extends caps without

@@ -193,11 +193,11 @@ class AccelLimitedAccDec final : public AccDec {
   std::array<Carry, kCarries> carries_{};
   std::size_t n_carries_ = 0;
 
-  // Late blocks with a filter (6., 8.): a block that arrives while the commanded position is
-  // within the filter's reach of its start is held: the tool stops at hold_mm_ (the window's
-  // end it was braking for) and settles, and only then do the caps of the blocks that arrived
-  // meanwhile (pending_, in arrival order) take effect.
+  // Late blocks (6., 8.): a block one of whose caps would bind at once is held: the tool stops
+  // at hold_mm_ (the window's end it was braking for) and settles, and only then do the caps of
+  // the blocks that arrived meanwhile (pending_, in arrival order) take effect.
   bool late_hold_ = false;
+  bool held_cycle_ = false;  // step() runs again with hold_mm_ as the stop
   double hold_mm_ = 0;
   std::uint32_t rest_cycles_ = 0;  // cycles in a row that started with the tool at rest
   std::vector<double> recent_;     // the commanded steps of the last lag_ cycles (ring)
