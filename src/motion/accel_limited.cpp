@@ -87,13 +87,41 @@
 //    current step u instead (more as u falls; inside the tool's segment, no joint zone within
 //    reach, and not with a filter after this type, whose r carry (8.) assumes r).
 //
-// 6. Late caps. A cap that arrives while the tool is already past its c (the interpreter was
-//    late: until then the window's last end point was a stop) is active at once. The stop the
-//    tool was braking for is as strict as any joint cap there: the last V_t = min(A0, a_i)/2
-//    before every stop (V_t is the lowest corner cap, a reversal's) is run at ≤ V_t, and the
-//    lattice's steps landing within V_t of the stop are ≤ V_t. Not covered: a feed cap below
-//    A0 (F·OR < 2 mm/s on the built-in machine) arriving late at the tail: its first step may
-//    be up to A0.
+// 6. Late caps. A block arrives *late* when the interpreter was late: until then the window's
+//    last end point was a stop, and the tool may already be braking for it. Its caps may then
+//    bind at once: one whose c the commanded position has passed is active at once, and with a
+//    filter (8.) the steps still in it were not bounded by it; one ahead may have a braking bound
+//    below the last step (the stop's bounds are lattice and real-distance forms, a cap's key is
+//    in σ with offset A0: they differ by up to A0/2, and by (1 − r)·A0 on a segment with r < 1).
+//    Found (accel_late_test.cpp, before the hold): a corner, a slower feed or an arc arriving
+//    during the braking ramp gave tangential accelerations up to 3 365 mm/s² (A 2 000), corners
+//    passed at 5× their Vg with a 200-cycle jerk stage (normal 10 769 mm/s²), 0.022 mm of
+//    rounding for a 0.01 mm tolerance, and without a filter on slow X/Y a late 30° corner braked
+//    an r = 0.8 line at A0 (X 1 740 > 1 500 mm/s²).
+//    So a block's range caps and its joint's cap are tested before anything is attached
+//    (check_late(), from on_segment() or, at a joint, from joint_zones() before its zone is
+//    applied, with σ(c) as low as the zone may leave it; late_cap(): active at once with V below
+//    the largest commanded step of the last lag cycles, or approaching with its bound at the
+//    commanded position below the last step — from at or above it, following it needs ≤ r·A0
+//    per cycle, 3. (ii)), and so is the stop at the joint when the joint's zone (7.) lowers σ
+//    ahead of the tool (its lattice bound must still allow the last step; found: a zone ahead of
+//    a 1 µm segment gave 2 011.7 mm/s²); insert() tests what these did not foresee (on_joint()'s
+//    cap for two corners in one cycle). Only when the tool is near enough for anything to bind:
+//    every cap starts at or after s0 − (2 + lag)·v_hi, and from c − p ≥ (u²/(2·A0) + u + A0)/r_lo
+//    on no key bound is below the step u. If one binds, the block is *held*: the window's end it
+//    arrived at (hold_mm_) stays a stop, the caps of every block arriving meanwhile wait in
+//    pending_ (and no joint zone reaches behind hold_mm_), and once the tool has been at rest
+//    there for the post filter's length they are inserted with the σ(c) of then. The tool
+//    starts from rest with an empty filter, so every cap holds from there on as in 1.–8.
+//    A held block costs the rest of the stop and the filter's span (corner arriving during the
+//    braking: +7 cycles without a filter, +21 with Tp = 16, +32 with T2 = 40, +191 with T2 = 200
+//    and Tp = 16 against the old, violating runs; at most 10 cycles more than the same block in
+//    time). Blocks in time, and late ones whose caps it can still follow, are attached as before
+//    (same samples: bench_motion --digest). What makes the usual late block followable: the
+//    last V_t = min(A0, a_i)/2 before every stop (V_t is the lowest corner cap, a reversal's) is
+//    run at ≤ V_t, and the lattice's steps landing within V_t of the stop are ≤ V_t.
+//    Not covered: the hold's release inserts every pending cap in one cycle, O(k log n) for the
+//    k blocks that arrived during the hold (once, with the tool at rest), not O(log n).
 //
 // 7. Joint zones: a turn and a speed change in the same cycles. Samples P[k] = p(s_k) on a path
 //    with one corner at j (unit tangents E before, S after), steps u1 = s_k − s_{k−1} and
@@ -151,9 +179,11 @@
 //      - the output at p averages the commanded accelerations over [p, p + lag·v], so a segment
 //        with r < 1 carries its r over the next lag·v_top mm (a head zone of the later segments;
 //        v_top the highest step allowed so far).
-//    Not covered: a block arriving late (the tool already braking for the window's end, 6.)
-//    whose widened caps start behind the commanded position — the steps already in the filter
-//    were not bounded by them.
+//    A block arriving late (6.), whose widened caps would start behind the commanded position
+//    over steps already in the filter, is held until the tool has stopped at its start and the
+//    filter has emptied: no cap then starts behind a step the filter still averages
+//    (accel_late_test.cpp: corners of 30–179°, slower feeds and arcs arriving at every point of
+//    the braking ramp, random programs with random arrival cycles; T2 = 4–200, Tp = 8–16).
 //
 // 9. The cycle after a capped corner. A joint cap holds the step after the crossing at Vg too,
 //    because the crossing's sample may lie anywhere around j. Once the crossing is done, where
@@ -273,6 +303,7 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
     }
   }
   tail_cap_pc_ *= 0.5;
+  recent_.assign(std::max<std::size_t>(1, static_cast<std::size_t>(lag_)), 0.0);
 }
 
 double AccelLimitedAccDec::segment_accel_pc2(std::uint64_t index) const {
@@ -341,6 +372,40 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   bool joint = contiguous && prev_index_ >= buf_.begin_index() &&
                buf_[prev_index_].kind == ItemKind::kMotion;
   for (std::uint64_t k = prev_index_ + 1; joint && k < index; ++k) joint = !buf_[k].barrier;
+  // A block arriving late (6.): a cap it brings that would slow the commanded position below
+  // its step at once (or, active at once, below the steps still in the filter) holds it.
+  late_check_ = false;
+  if (!late_hold_) {
+    // Every cap it brings starts at or after s0 − (2 + lag)·v_hi (joint caps: (1 + lag)·Vg, and a
+    // lattice cap's entry V before that; Vg ≤ the faster side's cap). From c − p ≥ d/r_lo,
+    // σ(c) − σ_p ≥ d = u²/(2·A0) + u + A0 and both key forms (3.) give a bound ≥ u there.
+    const double v_hi =
+        std::max({vcap, s.feed_pc * or_max_, have_prev_ ? vcap_[buf_.slot(prev_index_)] : 0.0});
+    const double r_lo = std::max(1e-6, std::min(1.0, r_zone_.min()));
+    const double near_mm = (2 + lag_) * v_hi + (step_ * step_ / (2 * a0_) + step_ + a0_) / r_lo;
+    if (pos_mm_ + near_mm >= s.s0_mm) {
+      late_m_ = step_;
+      for (const double x : recent_) late_m_ = std::max(late_m_, x);
+      late_check_ = late_m_ > 0;
+      late_at_mm_ = s.s0_mm;
+    }
+  }
+  n_late_range_ = 0;
+  if (late_check_) {
+    late_sigma_p_ = sigma_at(pos_mm_);
+    const double v[2] = {vcap, s.feed_pc};
+    const double reach_k[2] = {lag_ * vcap, lag_ * s.feed_pc * or_max_};
+    for (std::size_t k = 0; k < 2; ++k) {
+      // The same limit as the previous segment extends its cap: nothing new (see below).
+      const std::size_t from = 3 * buf_.slot(prev_index_) + k;
+      if (contiguous && owner_[from] != kNone && caps_[owner_[from]].v == v[k]) continue;
+      const double c = s.s0_mm - reach_k[k];
+      late_range_[n_late_range_++] = {c,      s.end_mm() + reach_k[k], v[k], 0,
+                                      k == 1, k == 0 && vcap >= a0_};
+    }
+    // At a joint, joint_zones() tests them with the σ its zone will leave.
+    if (!joint) check_late(s.s0_mm, 0, 1, nullptr);
+  }
   if (joint) joint_zones(prev_index_, slot, s);
   update_r(index);
   sigma0_[slot] = sigma_total_;
@@ -496,6 +561,13 @@ bool AccelLimitedAccDec::detach(std::uint64_t index) {
 }
 
 void AccelLimitedAccDec::insert(std::size_t pos, const Cap& cap) {
+  // (A cap the checks in on_segment() did not foresee, e.g. on_joint()'s lower cap for two
+  // corners within one cycle, still holds the block when it binds at once.)
+  if (!late_hold_ && late_check_ && late_cap(cap)) start_hold(late_at_mm_);
+  if (late_hold_) {
+    pending_.emplace_back(pos, cap);  // takes effect when the hold ends (release_hold())
+    return;
+  }
   clear(pos);
   const std::size_t kind = pos % 3;
   const std::size_t g = free_[kind * pool_ + --free_n_[kind]];
@@ -615,6 +687,68 @@ void AccelLimitedAccDec::carry(double until_mm, double r) {
     carries_[0] = carries_[--n_carries_];
   }
   carries_[n_carries_++] = {until_mm, r};
+}
+
+bool AccelLimitedAccDec::late_cap(const Cap& cap) const {
+  const double or_ratio = cap.feed ? prev_or_ : 1.0;
+  // Active at once: every step still in the filter must be within it.
+  if (pos_mm_ >= entry_mm(cap)) return or_ratio * cap.v < late_m_;
+  // Approaching: its braking bound at the commanded position (3.) must allow the last step,
+  // from which following it needs no more than r·A0 per cycle (3. (ii)).
+  const double k_sigma = 2 * a0_ * cap.sigma_c;
+  if (cap.lattice) {
+    const double h = cap.v - 0.5 * a0_;
+    return lattice(h * h + k_sigma, late_sigma_p_) < step_;
+  }
+  const double v = cap.feed ? static_cast<double>(level_of(or_ratio)) * level_step_ * cap.v : cap.v;
+  return brake(v * v + k_sigma, late_sigma_p_) < step_;
+}
+
+void AccelLimitedAccDec::check_late(double at_mm, double zone_mm, double zone_r,
+                                    const Cap* joint_cap) {
+  // σ(c) as the joint zone [zone_mm, at_mm] of rate zone_r (1: none) will leave it, or lower.
+  const double r_lo = std::min({1.0, r_zone_.min(), zone_r});
+  const double sigma_zone = zone_r < 1 ? sigma_at(zone_mm) : 0;
+  auto sigma_c = [&](double c) {
+    const double sc = sigma_at(c);
+    return zone_r < 1 && c > zone_mm ? std::min(sc, sigma_zone + r_lo * (c - zone_mm)) : sc;
+  };
+  for (std::size_t k = 0; k < n_late_range_ && !late_hold_; ++k) {
+    Cap cap = late_range_[k];
+    cap.sigma_c = sigma_c(cap.c_mm);
+    if (late_cap(cap)) start_hold(at_mm);
+  }
+  if (joint_cap != nullptr && !late_hold_) {
+    Cap cap = *joint_cap;
+    cap.sigma_c = sigma_c(cap.c_mm);
+    bool binds = late_cap(cap);
+    if (!cap.lattice && cap.v >= 0.5 * a0_) {
+      cap.lattice = true;  // insert_joint_cap() may choose either form here (3.): test both
+      binds = binds || late_cap(cap);
+    }
+    if (binds) start_hold(at_mm);
+  }
+}
+
+void AccelLimitedAccDec::start_hold(double at_mm) {
+  late_hold_ = true;
+  hold_mm_ = at_mm;
+  rest_cycles_ = 0;
+}
+
+void AccelLimitedAccDec::release_hold() {
+  late_hold_ = false;
+  late_check_ = false;  // (the inserts below are not a block's arrival)
+  for (auto& [pos, cap] : pending_) {
+    // σ ahead may have moved since (joint zones of later blocks): keys with the exact σ(c), 7.
+    cap.sigma_c = sigma_at(cap.c_mm);
+    if (pos % 3 == 2 && cap.v < a0_) {
+      cap.lattice = cap.v >= 0.5 * a0_ && cap.sigma_c - sigma_at(cap.c_mm - cap.v) >= 0.5 * cap.v;
+    }
+    insert(pos, cap);  // in arrival order: a later cap at the same position replaces it
+  }
+  pending_.clear();
+  cached_stop_mm_ = -1;
 }
 
 void AccelLimitedAccDec::advance_current() {
@@ -837,14 +971,39 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   zone_joint_pc_ = corner;
   zone_index_a_ = index_a;
   const double rj = std::max(d / a0_, 1e-6);
-  if (rj >= r_hi) return;  // the segments' own r already fits
   // Every step within V of the joint is ≤ V: the joint cap's Vg when there is one, else the
   // segments' caps.
   const double v = vj < 0.999 * around ? vj : around;
+  const double zone_from = a.end_mm() - (2 + lag_) * v;
+  if (late_check_ && !late_hold_) {
+    // The block's range caps and the joint cap on_joint() will set (6.), with σ(c) no higher
+    // than the zone below leaves it (r ≥ min(r_lo, r_j) over [zone start, c]).
+    Cap joint_cap{0, 0, 0, 0, false, false};
+    const double vg = std::min({corner, around, vj});
+    if (vg < 0.999 * around) {
+      const double w = vg * (1 + lag_);
+      joint_cap = {a.end_mm() - w, a.end_mm() + w, vg, 0, false, vg >= a0_};
+    }
+    check_late(a.end_mm(), std::max(zone_from, pos_mm_), rj < r_hi ? rj : 1,
+               vg < 0.999 * around ? &joint_cap : nullptr);
+    if (!late_hold_ && rj < r_hi && step_ > 0) {
+      // The zone also lowers σ between the tool and the stop it brakes for: that stop's lattice
+      // bound (3.) must still allow the last step. Taken at the joint, not at b's end: a hold
+      // that on_joint()'s cap for two corners in one cycle may still start (insert()) keeps the
+      // stop there (found: 2 011.7 mm/s² with a 1 µm segment between a reversal and 8°).
+      const double zs = std::max(zone_from, pos_mm_);
+      const double sigma_j = std::min(
+          sigma_at(a.end_mm()), sigma_at(zs) + std::min(rj, r_zone_.min()) * (a.end_mm() - zs));
+      const double d_sigma = std::max(0.0, sigma_j - late_sigma_p_);
+      if (std::sqrt(a0_ * a0_ / 4 + 2 * a0_ * d_sigma) - a0_ / 2 < step_) start_hold(a.end_mm());
+    }
+  }
+  if (rj >= r_hi) return;  // the segments' own r already fits
   // The zone [j − 2V, j] may reach back over several short segments (at most kZoneWalk): each
   // gets it as (part of) its tail zone. Never under or behind the tool (σ there is in use; a
   // late joint, see 6.).
-  const double zone_start = std::max(a.end_mm() - (2 + lag_) * v, pos_mm_);
+  // (While a late block is held the tool stops at hold_mm_: no zone behind it.)
+  const double zone_start = std::max(zone_from, late_hold_ ? hold_mm_ : pos_mm_);
   std::uint64_t first = index_a + 1;
   std::size_t walked = 0;
   for (std::uint64_t k = index_a + 1;
@@ -1041,6 +1200,27 @@ double AccelLimitedAccDec::after_corner() {
 
 void AccelLimitedAccDec::step(const CycleInput& in) {
   advance_current();
+  if (!held_cycle_) {
+    if (lag_ > 0) {
+      recent_[recent_pos_] = step_;  // (6.: the steps the filter may still hold)
+      recent_pos_ = recent_pos_ + 1 == recent_.size() ? 0 : recent_pos_ + 1;
+    }
+    if (late_hold_) {
+      // A held late block (6.) is released once the tool has been at rest at hold_mm_ for the
+      // post filter's length (its output is then hold_mm_ too); until then hold_mm_ is a stop.
+      rest_cycles_ = at_rest() ? rest_cycles_ + 1 : 0;
+      const std::uint32_t settle = lim_.post_filter() ? lim_.post_cycles : 0;
+      if (pos_mm_ >= hold_mm_ && rest_cycles_ > settle) release_hold();
+      if (late_hold_ && in.stop_mm > hold_mm_) {
+        CycleInput held = in;
+        held.stop_mm = hold_mm_;
+        held_cycle_ = true;
+        step(held);
+        held_cycle_ = false;
+        return;
+      }
+    }
+  }
   // Caps whose range the tool has entered, then caps it has left.
   while (entry_.min() <= pos_mm_) activate(entry_.argmin());
   // (release_ may hold an active cap's earlier end, ≤ its e: on_segment() extends caps without

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "core/geometry.hpp"
@@ -202,6 +203,29 @@ class AccelLimitedAccDec final : public AccDec {
   static constexpr std::size_t kCarries = 8;
   std::array<Carry, kCarries> carries_{};
   std::size_t n_carries_ = 0;
+
+  // Late blocks (6., 8.): a block one of whose caps would bind at once is held: the tool stops
+  // at hold_mm_ (the window's end it was braking for) and settles, and only then do the caps of
+  // the blocks that arrived meanwhile (pending_, in arrival order) take effect.
+  bool late_hold_ = false;
+  bool held_cycle_ = false;  // step() runs again with hold_mm_ as the stop
+  double hold_mm_ = 0;
+  std::uint32_t rest_cycles_ = 0;  // cycles in a row that started with the tool at rest
+  std::vector<double> recent_;     // the commanded steps of the last lag_ cycles (ring)
+  std::size_t recent_pos_ = 0;
+  std::vector<std::pair<std::size_t, Cap>> pending_;
+  // Set by on_segment() when the commanded position is near enough to the new block's start for
+  // one of its caps to bind at once: the last cycle's σ and the largest recent step.
+  bool late_check_ = false;
+  double late_sigma_p_ = 0, late_m_ = 0, late_at_mm_ = 0;
+  Cap late_range_[2];  // the new block's range caps that are not extensions of earlier ones
+  std::size_t n_late_range_ = 0;
+  bool late_cap(const Cap& cap) const;
+  // Tests late_range_ and the joint's cap (null: none); zone_r < 1: a joint zone of that rate
+  // will cover [zone_mm, at_mm] (7.), which lowers σ there.
+  void check_late(double at_mm, double zone_mm, double zone_r, const Cap* joint_cap);
+  void start_hold(double at_mm);
+  void release_hold();
 };
 
 }  // namespace cncore::motion
