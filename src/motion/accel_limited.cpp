@@ -55,6 +55,11 @@
 //    stop (the sum of A0 + 2A0 + … + n·A0 = n(n+1)A0/2 is exactly the right side's distance);
 //    with r < 1 the decrement is ≤ r·A0 ((1/2 − r)² ≤ 1/4). The step that reaches the stop is
 //    clipped to land on it (≤ A0: P4's arrival at ≤ Amax·τ), so the last sample is the stop.
+//    Near the stop the landing step in real distance (x, x − a, …, landing exactly) and the
+//    tail cap of 6. take a = A0 × the lowest plain r from the tool up to the stop: that minimum
+//    only rises as the tool moves on and both bounds rise with a, so following them never asks
+//    for more than a at once (with the r over the next step's reach only, a short low-r segment
+//    before the stop came into reach at once: 3 698 mm/s² on a 2 000 axis).
 //
 //    Caps of V ≥ A0 (and corner caps ≥ A0/2 on long segments with r ≥ 1/2) use the lattice
 //    key instead, K = (V − A0/2)² + 2·A0·σ(c), x ≤ √(K − 2·A0·σ(s)) − A0/2: following it the steps
@@ -180,10 +185,9 @@
 //    u1²/ρ: with d ≤ a(u2), a(u2)² + (u1²/ρ)² − (u2²/ρ)² ≤ g'² + 4·d·u1³/ρ² ≤ g'² + 2g'²φ +
 //    12g²φ² (φ = u1/ρ ≤ V_b/ρ, d·u1²/ρ ≤ g'²/2 + 3g²φ), so g'² = g²·min(0.98², 1 − 2.5φ −
 //    12φ²) keeps the pair within g (the 2 % of 5. for the chords at small φ).
-//    The stop's bounds in real distance (4., 6.) use a_seg over the next step's reach only; a
-//    state above the keys' bounds could meet a lower r coming into that reach (a short arc
-//    before the window's end: 0.63 → 0.19 µm/cycle² at once), so T is also held to those bounds
-//    with the lowest r up to the stop.
+//    The stop's bounds are not relaxed; in real distance they take the lowest r up to the stop
+//    (3.), so a state above the keys' bounds meets no lower r coming into the step's reach there
+//    (with the reach's r: a short arc before the window's end, 0.63 → 0.19 µm/cycle² at once).
 //
 // Without a filter the tool position is the commanded position and at rest means step 0.
 #include "motion/accel_limited.hpp"
@@ -1128,17 +1132,6 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     if (t < 0) {
       t = brake_arc < buf_.capacity() ? arc_brake_step(brake_arc, buf_[cur_], in.or_ratio, feed)
                                       : 0.0;
-      // The stop's bounds in real distance (below) take a_seg over the next step's reach; a
-      // state above the keys' bounds must also be below them with the lowest r up to the stop,
-      // or a lower r coming into reach would ask for more than r·A0 at once.
-      const double d = in.stop_mm - pos_mm_;
-      if (t > 0 && d > 0) {
-        const double a_min = r_span(pos_mm_, std::nextafter(in.stop_mm, pos_mm_)).plain * a0_;
-        const double vt = tail_cap_pc_;
-        const double tail =
-            d <= vt ? vt : std::sqrt(a_min * a_min + vt * vt + 2 * a_min * (d - vt)) - a_min;
-        t = std::min({t, landing_step(d, a_min), tail});
-      }
     }
     return t;
   };
@@ -1218,17 +1211,34 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   // The stop: its σ lattice (≥ u when A0²/4 + 2·A0·Δσ ≥ (u + A0/2)²), the landing step in real
   // distance (≥ √(2·a·d) − a/2 for every m: d/(m + 1) + a·(m + 1)/2 ≥ √(2·a·d) by AM–GM, so
   // ≥ u when 2·a·d ≥ (u + a/2)²; d ≤ a returns d ≥ √(2·a·d) − a/2) and the tail cap V_t.
+  // In real distance with the lowest r from the tool up to the stop, a_stop: with the r over the
+  // next step's reach only, a lower r coming into reach would lower these bounds by more than
+  // one step's deceleration at once (a 0.5 µm arc after a full circle at F 500: 8.3 → 6.8 →
+  // 5.2 → 1.5 µm/cycle, 3 698 mm/s² on a 2 000 axis). The minimum over [tool, stop) only rises
+  // as the tool moves on, and each bound rises with a, so following them stays within a_stop.
+  // Computed only where the landing step with the window's lowest r may be below u.
   const double vt = tail_cap_pc_;
-  const bool stop_far =
-      skip && u > 0 && a0_ * a0_ / 4 + 2 * a0_ * d_sigma >= above(u + a0_ / 2) &&
-      2 * a_seg * to_stop >= above(u + a_seg / 2) &&
-      (to_stop <= 0 ||
-       (to_stop <= vt ? vt >= u
-                      : a_seg * a_seg + vt * vt + 2 * a_seg * (to_stop - vt) >= above(u + a_seg)));
+  const bool lattice_far = skip && u > 0 && a0_ * a0_ / 4 + 2 * a0_ * d_sigma >= above(u + a0_ / 2);
+  auto landing_far = [&](double ac) {
+    return 2 * ac * to_stop >= above(u + ac / 2) &&
+           (to_stop <= vt ? vt >= u : ac * ac + vt * vt + 2 * ac * (to_stop - vt) >= above(u + ac));
+  };
+  double a_stop = a_seg;
+  bool stop_far = false;
+  if (to_stop > 0) {
+    // (Both bounds rise with a where to_stop ≥ 2·V_t: far with the window's lowest r is far.)
+    const double a_lo = std::min(a_seg, r_plain_.min() * a0_);
+    if (lattice_far && to_stop >= 2 * vt && landing_far(a_lo)) {
+      stop_far = true;
+    } else {
+      a_stop = std::min(a_seg, r_span(pos_mm_, std::nextafter(in.stop_mm, pos_mm_)).plain * a0_);
+    }
+  }
+  if (!stop_far) stop_far = lattice_far && landing_far(a_stop);
   if (!stop_far) {
     double stop_limit = std::sqrt(a0_ * a0_ / 4 + 2 * a0_ * d_sigma) - a0_ / 2;
-    stop_limit = std::max(stop_limit, std::min(to_stop, a_seg));
-    stop_limit = std::min(stop_limit, landing_step(to_stop, a_seg));
+    stop_limit = std::max(stop_limit, std::min(to_stop, a_stop));
+    stop_limit = std::min(stop_limit, landing_step(to_stop, a_stop));
     // The last V_t = min(A0, a_i)/2 before a stop (the lowest corner cap, a reversal) is run at
     // ≤ V_t: a joint cap that arrives late at a stop's position (the window's tail) then finds
     // the steps around it already within its cap (see 6.).
@@ -1236,8 +1246,9 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
       // In real distance with the local acceleration a (the cap lies within a few steps of the
       // stop; farther away the stop's own σ bound is the stricter one).
       const double tail =
-          to_stop <= vt ? vt
-                        : std::sqrt(a_seg * a_seg + vt * vt + 2 * a_seg * (to_stop - vt)) - a_seg;
+          to_stop <= vt
+              ? vt
+              : std::sqrt(a_stop * a_stop + vt * vt + 2 * a_stop * (to_stop - vt)) - a_stop;
       stop_limit = std::min(stop_limit, tail);
     }
     u = std::min(u, stop_limit);
