@@ -55,6 +55,11 @@
 //    stop (the sum of A0 + 2A0 + … + n·A0 = n(n+1)A0/2 is exactly the right side's distance);
 //    with r < 1 the decrement is ≤ r·A0 ((1/2 − r)² ≤ 1/4). The step that reaches the stop is
 //    clipped to land on it (≤ A0: P4's arrival at ≤ Amax·τ), so the last sample is the stop.
+//    Near the stop the landing step in real distance (x, x − a, …, landing exactly) and the
+//    tail cap of 6. take a = A0 × the lowest plain r from the tool up to the stop: that minimum
+//    only rises as the tool moves on and both bounds rise with a, so following them never asks
+//    for more than a at once (with the r over the next step's reach only, a short low-r segment
+//    before the stop came into reach at once: 3 698 mm/s² on a 2 000 axis).
 //
 //    Caps of V ≥ A0 (and corner caps ≥ A0/2 on long segments with r ≥ 1/2) use the lattice
 //    key instead, K = (V − A0/2)² + 2·A0·σ(c), x ≤ √(K − 2·A0·σ(s)) − A0/2: following it the steps
@@ -198,6 +203,35 @@
 //    stays inside b. The steps before the corner and the crossing step are unchanged, so every
 //    braking plan still holds. Capped corners along a lattice approach put the crossing sample
 //    near j, and the speed then rises by up to A0 at once: zigzag_0.002 22.53 → 20.54 s.
+//
+// 10. Braking on an arc with what the speed leaves. On an arc whose r was fixed for its top speed
+//    (2.), the braking bounds (3.) decelerate at r·A0 = √(g² − a_n,top²) at every speed, where
+//    a(v) = min(A_c, √(g'² − (v²/ρ)²)) is allowed (A_c = min(A0, the linear axes' share);
+//    arc_time braked at 0.31·A0 all the way down from 139 mm/s). While the tool is on
+//    such an arc (no filter, the step before also on it), let e be the end of the arc before its
+//    tail zone (7.), or the first entry of a cap not yet active if that is earlier, and W the
+//    lowest braking bound of the keys at σ(e) (3.; the geometric and lattice keys, and the feed
+//    keys of the override level separately). Every cap not yet active starts at or after e, so
+//    reaching e at ≤ W and following the keys from there meets all of them. Back from e, with
+//    q = v², dq/dp = −2·a(√q) gives the largest q at p from which a(v) still reaches W at e:
+//        Q(p) = W² + 2·A_c·(e − p) up to q* = ρ·√(g'² − A_c²) (where a stops being A_c), then
+//        Q = ρg'·sin(θ), θ = θ* + 2·(e − p − d*)/ρ (d/dp of ρg'·sin θ is −2g'·cos θ = −2·a),
+//        ρg' once θ ≥ π/2; Q = W² past e.
+//    The bound T is the step x with x² = Q(s + x) (Newton from above on the convex
+//    x² − Q(s + x), accepted only below the root). A step x_k ≤ T lands at s_{k+1} with
+//    x_k² ≤ Q(s_{k+1}), and the next bound has x_{k+1}² = Q(s_{k+1} + x_{k+1}), so
+//    x_k² − x_{k+1}² ≤ Q(s_{k+1}) − Q(s_{k+1} + x_{k+1}) ≤ 2·x_{k+1}·a(x_{k+1}) (a grows as q
+//    falls, and Q ≥ x_{k+1}² over that stretch): x_k − x_{k+1} ≤ a(x_{k+1}), the same argument as
+//    3. (ii) with a(v) for r·A0; a step landing past e is ≤ W, which the keys allow. Each braking
+//    bound b then becomes max(b, T): both are bounds from which the next cycle's bound is at most
+//    one allowed deceleration lower, so their maximum is too.
+//    a is taken at the later (smaller) step while the pair's normal acceleration is up to
+//    u1²/ρ: with d ≤ a(u2), a(u2)² + (u1²/ρ)² − (u2²/ρ)² ≤ g'² + 4·d·u1³/ρ² ≤ g'² + 2g'²φ +
+//    12g²φ² (φ = u1/ρ ≤ V_b/ρ, d·u1²/ρ ≤ g'²/2 + 3g²φ), so g'² = g²·min(0.98², 1 − 2.5φ −
+//    12φ²) keeps the pair within g (the 2 % of 5. for the chords at small φ).
+//    The stop's bounds are not relaxed; in real distance they take the lowest r up to the stop
+//    (3.), so a state above the keys' bounds meets no lower r coming into the step's reach there
+//    (with the reach's r: a short arc before the window's end, 0.63 → 0.19 µm/cycle² at once).
 //
 // Without a filter the tool position is the commanded position and at rest means step 0.
 #include "motion/accel_limited.hpp"
@@ -1094,6 +1128,71 @@ double AccelLimitedAccDec::feed_bound(double or_ratio, double sigma_p) const {
   return std::min(active, brake(k, sigma_p));
 }
 
+double AccelLimitedAccDec::arc_brake_step(std::size_t slot, const Segment& arc, double or_ratio,
+                                          bool feed) const {
+  // 9. The caps ahead, all starting at or after e: the target speed W at e (their braking
+  // bounds there, 3.), then the arc's braking curve back from e.
+  const double e = std::min(arc.end_mm() - tail_mm_[slot], entry_.min());
+  if (!(e > pos_mm_)) return 0;
+  const double sigma_e = sigma0_[slot] + seg_sigma(slot, e - arc.s0_mm);
+  double w = kInf;
+  if (feed) {
+    if (const double k = key_feed_.min(level_of(or_ratio)); k != kInf) w = brake(k, sigma_e);
+  } else {
+    if (const double k = key_geo_.min(); k != kInf) w = std::min(w, brake(k, sigma_e));
+    if (const double k = key_lattice_.min(); k != kInf) w = std::min(w, lattice(k, sigma_e));
+  }
+  const double rho = arc_rho_[slot];
+  // g'² = g²·min(0.98², 1 − 2.5·φ − 12·φ²), φ = V_b/ρ the arc's largest angle per cycle (10.).
+  const double phi = vcap_[slot] / rho;
+  const double g = arc_g_[slot] * std::sqrt(std::min(kRecoverShare * kRecoverShare,
+                                                     1 - 2.5 * phi - 12 * phi * phi));
+  const double q_top = rho * g;  // v² where the normal acceleration alone is g'
+  if (!(g > 0) || w == kInf || w * w >= q_top) return 0;
+  // a(q) = min(A_c, √(g'² − (q/ρ)²)): A_c below q*, the circle law above.
+  const double a_c = std::min(a0_, lin_r_[slot] * a0_);
+  const double q_star = rho * std::sqrt(std::max(0.0, g * g - a_c * a_c));
+  const double w2 = w * w;
+  const double d_star = w2 < q_star ? (q_star - w2) / (2 * a_c) : 0.0;
+  const double theta0 = std::asin(std::max(w2, q_star) / q_top);
+  constexpr double kQuarter = 1.5707963267948966;
+  // Q(p): the largest v² at p from which braking at a(v) reaches ≤ W at e; dQ/dp = −2·a.
+  auto q_at = [&](double p, double& slope) {
+    const double d = e - p;
+    if (d <= 0) {
+      slope = 0;
+      return w2;
+    }
+    if (d <= d_star) {
+      slope = -2 * a_c;
+      return w2 + 2 * a_c * d;
+    }
+    const double th = theta0 + 2 * (d - d_star) / rho;
+    if (th >= kQuarter) {
+      slope = 0;
+      return q_top;
+    }
+    slope = -2 * g * std::cos(th);
+    return q_top * std::sin(th);
+  };
+  // The step x with x² = Q(pos + x): f(x) = x² − Q(pos + x) is increasing, and convex up to
+  // e − pos (Q is concave there); beyond it Q = W², so the root is W when e − pos < W.
+  if (e - pos_mm_ < w) return w;
+  // Newton from a point with f ≥ 0 inside [0, e − pos] (f(e − pos) = (e − pos)² − W² ≥ 0, and
+  // f(√Q(pos)) ≥ 0) stays above the root there; the result is accepted only with f ≤ 0.
+  double slope = 0;
+  double x = std::min(e - pos_mm_, std::sqrt(q_at(pos_mm_, slope)));
+  for (int it = 0; it < 30; ++it) {
+    const double f = x * x - q_at(pos_mm_ + x, slope);
+    if (!(f > 0)) break;
+    const double dx = f / (2 * x - slope);
+    x -= dx;
+    if (!(dx > 1e-13 * x)) break;
+  }
+  x *= 1 - 1e-9;  // just below the root
+  return x > 0 && x * x <= q_at(pos_mm_ + x, slope) ? x : 0.0;
+}
+
 AccelLimitedAccDec::Bounds AccelLimitedAccDec::bound(double or_ratio, double sigma_p) const {
   auto brake_or_inf = [&](double k) { return k == kInf ? kInf : brake(k, sigma_p); };
   const std::size_t level = level_of(or_ratio);
@@ -1241,6 +1340,8 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   double r = 1, r_seg = 1;
   // The tool's arc whose deceleration may follow its speed (5.); none: capacity.
   std::size_t recover_arc = buf_.capacity();
+  // The tool's arc whose braking bounds may follow its speed (10.); none: capacity.
+  std::size_t brake_arc = buf_.capacity();
   if (!buf_.empty() && cur_ < buf_.end_index() && buf_[cur_].kind == ItemKind::kMotion) {
     const Segment& s = buf_[cur_];
     const std::size_t slot = buf_.slot(cur_);
@@ -1266,6 +1367,9 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
         rates.zones == ratio_[slot]) {
       recover_arc = slot;
     }
+    // The pair of this step and the one before is inside the arc, or this step lands past the
+    // point e where 9. hands over to the keys (then ≤ W, a step the keys allow).
+    if (lag_ == 0 && arc_g_[slot] > 0 && pos_mm_ - step_ > s.s0_mm) brake_arc = slot;
   }
   // a: the speed change allowed in this cycle; a_seg, without the joint zones: the stop's
   // lattice in real distance near the stop (the zones are in σ, which the stop bound uses).
@@ -1280,7 +1384,24 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   // rounding of either side: the skipped term, rounded, is > t). Same double as the full
   // computation (the order of a minimum does not matter; max(0, ·) below makes −0 and +0 one).
   // The feed bound is computed exactly: the override-decrease ramp compares against it.
-  const double feed_limit = feed_bound(in.or_ratio, sigma_p);
+  // The braking bound on the tool's arc with what the speed leaves (10.), computed only where a
+  // braking bound is the binding term; each braking bound b becomes max(b, T).
+  // (The geometric keys and the feed keys separately: after an override decrease the feed part
+  // is left by the ramp of 5., the geometric part stays a hard limit.)
+  double arc_t[2] = {-1, -1};
+  auto arc_brake = [&](bool feed) {
+    double& t = arc_t[feed ? 1 : 0];
+    if (t < 0) {
+      t = brake_arc < buf_.capacity() ? arc_brake_step(brake_arc, buf_[cur_], in.or_ratio, feed)
+                                      : 0.0;
+    }
+    return t;
+  };
+  double feed_limit = feed_bound(in.or_ratio, sigma_p);
+  if (brake_arc < buf_.capacity()) {
+    const double active = in.or_ratio * active_feed_.min();
+    if (feed_limit < active) feed_limit = std::min(active, std::max(feed_limit, arc_brake(true)));
+  }
   if (check_) {
     const Bounds full = bound(in.or_ratio, sigma_p);
     last_bound_ = std::min(full.geo, full.feed);
@@ -1335,28 +1456,51 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   const double k_geo = key_geo_.min();
   if (k_geo != kInf) {
     const double arg = a0_ * a0_ + k_geo - 2 * a0_ * sigma_p;
-    if (!(skip && arg >= above(u + a0_))) u = std::min(u, brake(k_geo, sigma_p));
+    if (!(skip && arg >= above(u + a0_))) {
+      const double b = brake(k_geo, sigma_p);
+      if (b < u) u = std::min(u, std::max(b, arc_brake(false)));
+    }
   }
   const double k_lat = key_lattice_.min();
   if (k_lat != kInf) {
     const double arg = k_lat - 2 * a0_ * sigma_p;
-    if (!(skip && arg >= above(u + 0.5 * a0_))) u = std::min(u, lattice(k_lat, sigma_p));
+    if (!(skip && arg >= above(u + 0.5 * a0_))) {
+      const double b = lattice(k_lat, sigma_p);
+      if (b < u) u = std::min(u, std::max(b, arc_brake(false)));
+    }
   }
 
   // The stop: its σ lattice (≥ u when A0²/4 + 2·A0·Δσ ≥ (u + A0/2)²), the landing step in real
   // distance (≥ √(2·a·d) − a/2 for every m: d/(m + 1) + a·(m + 1)/2 ≥ √(2·a·d) by AM–GM, so
   // ≥ u when 2·a·d ≥ (u + a/2)²; d ≤ a returns d ≥ √(2·a·d) − a/2) and the tail cap V_t.
+  // In real distance with the lowest r from the tool up to the stop, a_stop: with the r over the
+  // next step's reach only, a lower r coming into reach would lower these bounds by more than
+  // one step's deceleration at once (a 0.5 µm arc after a full circle at F 500: 8.3 → 6.8 →
+  // 5.2 → 1.5 µm/cycle, 3 698 mm/s² on a 2 000 axis). The minimum over [tool, stop) only rises
+  // as the tool moves on, and each bound rises with a, so following them stays within a_stop.
+  // Computed only where the landing step with the window's lowest r may be below u.
   const double vt = tail_cap_pc_;
-  const bool stop_far =
-      skip && u > 0 && a0_ * a0_ / 4 + 2 * a0_ * d_sigma >= above(u + a0_ / 2) &&
-      2 * a_seg * to_stop >= above(u + a_seg / 2) &&
-      (to_stop <= 0 ||
-       (to_stop <= vt ? vt >= u
-                      : a_seg * a_seg + vt * vt + 2 * a_seg * (to_stop - vt) >= above(u + a_seg)));
+  const bool lattice_far = skip && u > 0 && a0_ * a0_ / 4 + 2 * a0_ * d_sigma >= above(u + a0_ / 2);
+  auto landing_far = [&](double ac) {
+    return 2 * ac * to_stop >= above(u + ac / 2) &&
+           (to_stop <= vt ? vt >= u : ac * ac + vt * vt + 2 * ac * (to_stop - vt) >= above(u + ac));
+  };
+  double a_stop = a_seg;
+  bool stop_far = false;
+  if (to_stop > 0) {
+    // (Both bounds rise with a where to_stop ≥ 2·V_t: far with the window's lowest r is far.)
+    const double a_lo = std::min(a_seg, r_plain_.min() * a0_);
+    if (lattice_far && to_stop >= 2 * vt && landing_far(a_lo)) {
+      stop_far = true;
+    } else {
+      a_stop = std::min(a_seg, r_span(pos_mm_, std::nextafter(in.stop_mm, pos_mm_)).plain * a0_);
+    }
+  }
+  if (!stop_far) stop_far = lattice_far && landing_far(a_stop);
   if (!stop_far) {
     double stop_limit = std::sqrt(a0_ * a0_ / 4 + 2 * a0_ * d_sigma) - a0_ / 2;
-    stop_limit = std::max(stop_limit, std::min(to_stop, a_seg));
-    stop_limit = std::min(stop_limit, landing_step(to_stop, a_seg));
+    stop_limit = std::max(stop_limit, std::min(to_stop, a_stop));
+    stop_limit = std::min(stop_limit, landing_step(to_stop, a_stop));
     // The last V_t = min(A0, a_i)/2 before a stop (the lowest corner cap, a reversal) is run at
     // ≤ V_t: a joint cap that arrives late at a stop's position (the window's tail) then finds
     // the steps around it already within its cap (see 6.).
@@ -1364,8 +1508,9 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
       // In real distance with the local acceleration a (the cap lies within a few steps of the
       // stop; farther away the stop's own σ bound is the stricter one).
       const double tail =
-          to_stop <= vt ? vt
-                        : std::sqrt(a_seg * a_seg + vt * vt + 2 * a_seg * (to_stop - vt)) - a_seg;
+          to_stop <= vt
+              ? vt
+              : std::sqrt(a_stop * a_stop + vt * vt + 2 * a_stop * (to_stop - vt)) - a_stop;
       stop_limit = std::min(stop_limit, tail);
     }
     u = std::min(u, stop_limit);

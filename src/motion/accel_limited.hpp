@@ -113,6 +113,11 @@ class AccelLimitedAccDec final : public AccDec {
   double lattice(double k, double sigma_p) const;
   // The feed part of bound(), the same double.
   double feed_bound(double or_ratio, double sigma_p) const;
+  // On the tool's arc (slot), the largest step that can still meet the approaching caps when
+  // braking with what the speed leaves of the axis budget (10.); 0 when it does not apply.
+  // (feed: the feed keys of the override level; else the geometric and lattice keys.)
+  double arc_brake_step(std::size_t slot, const planner::Segment& arc, double or_ratio,
+                        bool feed) const;
   // The override level whose feed keys the cycle reads (cached for the last override).
   std::size_t level_of(double or_ratio) const;
 
