@@ -71,6 +71,14 @@ void unregister_temp(int slot) {
 }  // namespace
 
 AtomicOutputFile::AtomicOutputFile(std::string path) : path_(std::move(path)) {
+  // A device or a pipe (/dev/null, /dev/stdout, a FIFO) is written directly: renaming a
+  // temporary over it would replace the device node with a regular file (as root, /dev/null).
+  struct stat st {};
+  if (::stat(path_.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) {
+    fd_ = ::open(path_.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd_ < 0) throw InputError(path_, 0, 0, "cannot open output file: " + errno_text());
+    return;
+  }
   std::vector<char> name(path_.begin(), path_.end());
   const char suffix[] = ".tmp-XXXXXX";
   name.insert(name.end(), suffix, suffix + sizeof(suffix));  // includes the terminating NUL
@@ -122,6 +130,10 @@ void AtomicOutputFile::commit() {
     const std::string why = errno_text();
     discard();
     throw InputError(path_, 0, 0, "cannot write output file: " + why);
+  }
+  if (temp_.empty()) {  // written directly (a device or a pipe)
+    committed_ = true;
+    return;
   }
   if (::rename(temp_.c_str(), path_.c_str()) != 0) {
     const std::string why = errno_text();

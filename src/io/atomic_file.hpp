@@ -3,7 +3,8 @@
 // over FILE, and destruction without commit removes the temporary. A failed run therefore
 // leaves neither a half-written file nor a temporary behind, even when it is interrupted by
 // SIGINT, SIGTERM or SIGHUP (a handler removes the open temporaries, then the process dies of
-// the signal as usual).
+// the signal as usual). An existing device or pipe (/dev/null, a FIFO) is written directly
+// instead: there is no file to leave half-written, and a rename would replace the node.
 #pragma once
 
 #include <string>

@@ -2,8 +2,13 @@
 #include "io/atomic_file.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
+#include <fstream>
+#include <iterator>
 #include <stdexcept>
+#include <string>
+#include <thread>
 
 #include "core/error.hpp"
 #include "test_dir.hpp"
@@ -30,6 +35,29 @@ TEST(AtomicOutputFile, CommitPutsTheWholeFileInPlace) {
   }
   EXPECT_EQ(slurp(path), "a,b\n1,2\n");
   EXPECT_EQ(list_dir(dir), std::vector<std::string>{"out.csv"});
+}
+
+// A FIFO stands for any device or pipe (/dev/null, /dev/stdout): written directly, the node
+// stays what it was (a rename over /dev/null as root made it a regular file).
+TEST(AtomicOutputFile, PipeIsWrittenDirectlyAndStaysAPipe) {
+  const auto dir = fresh_dir();
+  const auto path = dir / "fifo";
+  ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);
+  std::string got;
+  std::thread reader([&] {
+    std::ifstream in(path);
+    got.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  });
+  {
+    AtomicOutputFile f(path.string());
+    EXPECT_TRUE(f.temp_path().empty());
+    f.write("a,b\n");
+    f.commit();
+  }
+  reader.join();
+  EXPECT_EQ(got, "a,b\n");
+  EXPECT_TRUE(std::filesystem::is_fifo(path));
+  EXPECT_EQ(list_dir(dir), std::vector<std::string>{"fifo"});
 }
 
 TEST(AtomicOutputFile, NoCommitLeavesNothing) {
