@@ -14,11 +14,17 @@
 #include "motion/accdec.hpp"
 #include "motion/moving_average.hpp"
 #include "planner/buffer.hpp"
+#include "planner/huge_pages.hpp"
 #include "planner/min_tree.hpp"
 
 namespace cncore::motion {
 
 class AccelLimitedAccDec final : public AccDec {
+  // The per-slot and per-cap arrays (~6 MB for a 10 000-block window) come from huge pages
+  // like the kernel's other buffers (planner/huge_pages.hpp: a faster construction).
+  template <typename T>
+  using Buf = std::vector<T, planner::HugePageAllocator<T>>;
+
  public:
   // check_reference_walk: every cycle also compute the bound by reference_bound() and count the
   // cycles where it differs (reference_mismatches(); tests).
@@ -132,14 +138,14 @@ class AccelLimitedAccDec final : public AccDec {
   mutable std::size_t level_ = 0;
 
   // Per buffer slot: σ at the segment start, acceleration ratio r = A_seg/A0, speed cap.
-  std::vector<double> sigma0_, ratio_, vcap_;
+  Buf<double> sigma0_, ratio_, vcap_;
   // Per buffer slot: the joint zones (see 7.): r ≤ head_r_ on the first head_mm_, ≤ tail_r_ on
   // the last tail_mm_ of the segment.
-  std::vector<double> len_mm_, head_mm_, head_r_, tail_mm_, tail_r_;
+  Buf<double> len_mm_, head_mm_, head_r_, tail_mm_, tail_r_;
   // Per buffer slot, arcs whose plane axes share normal and tangential acceleration: the axis
   // bound g (0: none), the radius of curvature, and the ratio of the linear axis shares alone —
   // an override decrease decelerates with what the current speed leaves (5.).
-  std::vector<double> arc_g_, arc_rho_, lin_r_;
+  Buf<double> arc_g_, arc_rho_, lin_r_;
   // Passing speed the joint zones of the joint after item zone_index_a_ were computed for (a
   // joint cap when lower than the segments' caps; see 7.).
   double zone_vg_ = 0;
@@ -151,10 +157,10 @@ class AccelLimitedAccDec final : public AccDec {
   // cap of the joint at its start), each holding at most one cap of its kind, so a pool of
   // capacity + 1 ids per kind (the overflow position included) never runs out.
   std::size_t pool_;
-  std::vector<Cap> caps_;     // by id g
-  std::vector<State> state_;  // by id g
-  std::vector<std::uint32_t> owner_, where_;
-  std::vector<std::uint32_t> free_;  // free ids per kind: free_[kind·pool_ + k], k < free_n_
+  Buf<Cap> caps_;     // by id g
+  Buf<State> state_;  // by id g
+  Buf<std::uint32_t> owner_, where_;
+  Buf<std::uint32_t> free_;  // free ids per kind: free_[kind·pool_ + k], k < free_n_
   std::array<std::size_t, 3> free_n_{};
   planner::MinTree entry_, key_geo_, key_lattice_, active_geo_, active_feed_, release_;
   // One tree per override level (levels_ ≤ kMaxLevels), over the feed pool's ids (g − pool_).
