@@ -157,8 +157,8 @@ class AccelLimitedAccDec final : public AccDec {
   // cap of the joint at its start), each holding at most one cap of its kind, so a pool of
   // capacity + 1 ids per kind (the overflow position included) never runs out.
   std::size_t pool_;
-  Buf<Cap> caps_;     // by id g
-  Buf<State> state_;  // by id g
+  std::vector<Cap> caps_;  // by id g
+  Buf<State> state_;       // by id g
   Buf<std::uint32_t> owner_, where_;
   Buf<std::uint32_t> free_;  // free ids per kind: free_[kind·pool_ + k], k < free_n_
   std::array<std::size_t, 3> free_n_{};
