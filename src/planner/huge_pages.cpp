@@ -14,10 +14,10 @@ namespace cncore::planner {
 
 namespace {
 
-constexpr std::size_t kAlign = 64;                  // cache line
-constexpr std::size_t kSmall = 64 * 1024;           // below: operator new (a few pages at most)
-constexpr std::size_t kHugePage = 2 * 1024 * 1024;  // x86-64 transparent huge page
-constexpr std::size_t kRegion = 8 * kHugePage;      // virtual size of a region (touched lazily)
+constexpr std::size_t kAlign = 64;                      // cache line
+constexpr std::size_t kSmall = std::size_t{64} * 1024;  // below: operator new (a few pages at most)
+constexpr std::size_t kHugePage = std::size_t{2} * 1024 * 1024;  // x86-64 transparent huge page
+constexpr std::size_t kRegion = 8 * kHugePage;  // virtual size of a region (touched lazily)
 
 std::size_t round_up(std::size_t n, std::size_t to) {
   return (n + to - 1) / to * to;
@@ -44,12 +44,12 @@ char* map_region(std::size_t size) {
   void* raw = ::mmap(nullptr, span, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
   if (raw == MAP_FAILED) return nullptr;
   const auto addr = reinterpret_cast<std::uintptr_t>(raw);
-  const std::uintptr_t start = (addr + kHugePage - 1) / kHugePage * kHugePage;
-  // Trim the unaligned head and the tail so that only the aligned range stays mapped.
-  if (start > addr) ::munmap(raw, start - addr);
-  const std::uintptr_t end = start + size;
-  if (addr + span > end) ::munmap(reinterpret_cast<void*>(end), addr + span - end);
-  auto* base = reinterpret_cast<char*>(start);
+  const std::size_t head = (kHugePage - addr % kHugePage) % kHugePage;
+  // Trim the unaligned head and the tail so that only the aligned range stays mapped (pointer
+  // arithmetic on the mapping, no integer-to-pointer casts).
+  char* const base = static_cast<char*>(raw) + head;
+  if (head > 0) ::munmap(raw, head);
+  if (span > head + size) ::munmap(base + size, span - head - size);
   ::madvise(base, size, MADV_HUGEPAGE);  // best effort: 4 KB pages when THP is off
   return base;
 }
