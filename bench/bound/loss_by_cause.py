@@ -29,6 +29,8 @@ import os
 import subprocess
 import tempfile
 
+import per_block
+
 
 def profile(L, v0, v1, cap, a):
     """(xa, xd, xm) of the accelerate-cruise-decelerate profile: cruise on [xa, xd] when
@@ -91,23 +93,13 @@ def main():
     if not a.per_block:
         subprocess.run([a.bound, a.program, "--per-block", per] + mach, check=True,
                        stdout=subprocess.DEVNULL)
-    B = []
-    with open(per) as f:
-        for r in csv.DictReader(f, delimiter="\t"):
-            B.append(dict(line=int(r["line"]), kind=r["kind"], L=float(r["length_mm"]),
-                          cap=float(r["cap_mm_s"]), v0=float(r["v_in_mm_s"]),
-                          v1=float(r["v_out_mm_s"]), J=float(r["join_cap_mm_s"]),
-                          time=float(r["time_s"]),
-                          p0=[float(r["x0"]), float(r["y0"]), float(r["z0"])],
-                          p1=[float(r["x1"]), float(r["y1"]), float(r["z1"])]))
+    B = per_block.read_blocks(per)
     n = len(B)
     S = [0.0]
     T = [0.0]
     for b in B:
         b["a"] = fit_a(b["L"], b["v0"], b["v1"], b["cap"], b["time"])
-        d = [b["p1"][i] - b["p0"][i] for i in range(3)]
-        ln = math.sqrt(sum(x * x for x in d))
-        b["u"] = [x / ln for x in d] if ln > 0 else [0.0] * 3
+        b["u"] = per_block.unit(b)
         S.append(S[-1] + b["L"])
         T.append(T[-1] + b["time"])
 

@@ -1,22 +1,31 @@
-"""Shared by reference_profile.py and discrete_reference.py: the `cncore-bound --per-block` TSV
+"""Shared by reference_profile.py, discrete_reference.py and loss_by_cause.py: the `cncore-bound --per-block` TSV
 of a program of lines, and points along its path for the trajectory CSV they write."""
 import csv
 import math
 import sys
 
 
-def read_lines(path, tool):
-    """The blocks of a per-block TSV as dicts (line, L, cap, J, u, p0, p1); arcs are refused."""
-    segs = []
+def read_blocks(path):
+    """Every block of a per-block TSV as a dict (line, kind, L, cap, v0, v1, J, time, p0, p1)."""
+    blocks = []
     with open(path) as f:
         for r in csv.DictReader(f, delimiter="\t"):
-            if r["kind"] != "line":
-                sys.exit("%s: arcs are not handled (line %s)" % (tool, r["line"]))
-            segs.append(dict(line=int(r["line"]), L=float(r["length_mm"]),
-                             cap=float(r["cap_mm_s"]), J=float(r["join_cap_mm_s"]),
-                             u=float(r["v_out_mm_s"]),
-                             p0=[float(r["x0"]), float(r["y0"]), float(r["z0"])],
-                             p1=[float(r["x1"]), float(r["y1"]), float(r["z1"])]))
+            blocks.append(dict(line=int(r["line"]), kind=r["kind"], L=float(r["length_mm"]),
+                               cap=float(r["cap_mm_s"]), v0=float(r["v_in_mm_s"]),
+                               v1=float(r["v_out_mm_s"]), J=float(r["join_cap_mm_s"]),
+                               time=float(r["time_s"]),
+                               p0=[float(r["x0"]), float(r["y0"]), float(r["z0"])],
+                               p1=[float(r["x1"]), float(r["y1"]), float(r["z1"])]))
+    return blocks
+
+
+def read_lines(path, tool):
+    """read_blocks() of a program of lines, with u = v1 (the speed out); arcs are refused."""
+    segs = read_blocks(path)
+    for seg in segs:
+        if seg["kind"] != "line":
+            sys.exit("%s: arcs are not handled (line %s)" % (tool, seg["line"]))
+        seg["u"] = seg["v1"]
     return segs
 
 

@@ -176,11 +176,7 @@ RC_GTEST_PROP(AccelFilter, RandomProgramsKeepEveryLimit, ()) {
   if (!rep.ok()) RC_LOG() << rep.summary() << "\n";
   RC_ASSERT(rep.ok());
   RC_ASSERT(r.mismatches == 0u);
-  AxisVec end = g.start;
-  for (const Block& b : blocks) {
-    if (b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc)
-      end = b.end;
-  }
+  const AxisVec end = program_end(g.start, blocks);
   for (std::size_t i = 0; i < 3; ++i)
     RC_ASSERT(std::abs(r.samples.back().position[i] - end[i]) <= 1e-9);
 }

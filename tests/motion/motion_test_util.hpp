@@ -130,6 +130,15 @@ struct RunResult {
   double time_s() const { return samples.empty() ? 0 : samples.back().t_s; }
 };
 
+// The programmed end point: the last motion block's end (`start` when there is none).
+inline AxisVec program_end(AxisVec start, const std::vector<Block>& blocks) {
+  for (const Block& b : blocks) {
+    if (b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc)
+      start = b.end;
+  }
+  return start;
+}
+
 struct RunOpts {
   KernelOptions kernel;
   std::vector<std::pair<double, double>> override_steps;  // (t_s, pct)
