@@ -730,12 +730,19 @@ bool AccelLimitedAccDec::late_cap(const Cap& cap) const {
   // Approaching: its braking bound at the commanded position (3.) must allow the last step,
   // from which following it needs no more than r·A0 per cycle (3. (ii)).
   const double k_sigma = 2 * a0_ * cap.sigma_c;
-  if (cap.lattice) {
-    const double h = cap.v - 0.5 * a0_;
-    return lattice(h * h + k_sigma, late_sigma_p_) < step_;
-  }
+  const double h = cap.v - 0.5 * a0_;
   const double v = cap.feed ? static_cast<double>(level_of(or_ratio)) * level_step_ * cap.v : cap.v;
-  return brake(v * v + k_sigma, late_sigma_p_) < step_;
+  auto bound_at = [&](double sigma) {
+    return cap.lattice ? lattice(h * h + k_sigma, sigma) : brake(v * v + k_sigma, sigma);
+  };
+  if (bound_at(late_sigma_p_) < step_) return true;
+  // The last step followed 10.'s curve to W at e: a cap entering before e moves e back, one
+  // whose bound at e is below W lowers W; either may lower that curve by more than one cycle's
+  // deceleration (found: a late line's lattice cap entering 0.11 mm before e, 2 827 mm/s²).
+  if (relied_e_mm_ == kInf) return false;
+  if (entry_mm(cap) < relied_e_mm_) return true;
+  const double w = cap.feed ? relied_w_feed_ : relied_w_geo_;
+  return w < kInf && bound_at(relied_sigma_e_) < w;
 }
 
 void AccelLimitedAccDec::check_late(double at_mm, double zone_mm, double zone_r,
@@ -747,6 +754,9 @@ void AccelLimitedAccDec::check_late(double at_mm, double zone_mm, double zone_r,
     const double sc = sigma_at(c);
     return zone_r < 1 && c > zone_mm ? std::min(sc, sigma_zone + r_lo * (c - zone_mm)) : sc;
   };
+  // A zone starting before the e of 10.'s curve the last step followed moves e (the arc's tail)
+  // or σ(e) (see late_cap()).
+  if (zone_r < 1 && relied_e_mm_ < kInf && zone_mm < relied_e_mm_) start_hold(at_mm);
   for (std::size_t k = 0; k < n_late_range_ && !late_hold_; ++k) {
     Cap cap = late_range_[k];
     cap.sigma_c = sigma_c(cap.c_mm);
@@ -1129,7 +1139,7 @@ double AccelLimitedAccDec::feed_bound(double or_ratio, double sigma_p) const {
 }
 
 double AccelLimitedAccDec::arc_brake_step(std::size_t slot, const Segment& arc, double or_ratio,
-                                          bool feed) const {
+                                          bool feed, ArcTarget& at) const {
   // 9. The caps ahead, all starting at or after e: the target speed W at e (their braking
   // bounds there, 3.), then the arc's braking curve back from e.
   const double e = std::min(arc.end_mm() - tail_mm_[slot], entry_.min());
@@ -1142,6 +1152,7 @@ double AccelLimitedAccDec::arc_brake_step(std::size_t slot, const Segment& arc, 
     if (const double k = key_geo_.min(); k != kInf) w = std::min(w, brake(k, sigma_e));
     if (const double k = key_lattice_.min(); k != kInf) w = std::min(w, lattice(k, sigma_e));
   }
+  at = {e, sigma_e, w};
   const double rho = arc_rho_[slot];
   // g'² = g²·min(0.98², 1 − 2.5·φ − 12·φ²), φ = V_b/ρ the arc's largest angle per cycle (10.).
   const double phi = vcap_[slot] / rho;
@@ -1389,15 +1400,18 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   // (The geometric keys and the feed keys separately: after an override decrease the feed part
   // is left by the ramp of 5., the geometric part stays a hard limit.)
   double arc_t[2] = {-1, -1};
+  ArcTarget arc_at[2];
   auto arc_brake = [&](bool feed) {
-    double& t = arc_t[feed ? 1 : 0];
-    if (t < 0) {
-      t = brake_arc < buf_.capacity() ? arc_brake_step(brake_arc, buf_[cur_], in.or_ratio, feed)
-                                      : 0.0;
+    const std::size_t i = feed ? 1 : 0;
+    if (arc_t[i] < 0) {
+      arc_t[i] = brake_arc < buf_.capacity()
+                     ? arc_brake_step(brake_arc, buf_[cur_], in.or_ratio, feed, arc_at[i])
+                     : 0.0;
     }
-    return t;
+    return arc_t[i];
   };
   double feed_limit = feed_bound(in.or_ratio, sigma_p);
+  const double feed_keys = feed_limit;  // without 10.
   if (brake_arc < buf_.capacity()) {
     const double active = in.or_ratio * active_feed_.min();
     if (feed_limit < active) feed_limit = std::min(active, std::max(feed_limit, arc_brake(true)));
@@ -1453,12 +1467,16 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   // argument is ≥ (u + A0)²; lattice keys: x ≤ √(K − 2·A0·σ) − A0/2 ≥ u when K − 2·A0·σ ≥
   // (u + A0/2)².
   const bool skip = u > 0 && u < kInf;
+  double geo_keys = kInf;  // the lowest geometric braking bound below u, without 10.
   const double k_geo = key_geo_.min();
   if (k_geo != kInf) {
     const double arg = a0_ * a0_ + k_geo - 2 * a0_ * sigma_p;
     if (!(skip && arg >= above(u + a0_))) {
       const double b = brake(k_geo, sigma_p);
-      if (b < u) u = std::min(u, std::max(b, arc_brake(false)));
+      if (b < u) {
+        geo_keys = b;
+        u = std::min(u, std::max(b, arc_brake(false)));
+      }
     }
   }
   const double k_lat = key_lattice_.min();
@@ -1466,7 +1484,10 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     const double arg = k_lat - 2 * a0_ * sigma_p;
     if (!(skip && arg >= above(u + 0.5 * a0_))) {
       const double b = lattice(k_lat, sigma_p);
-      if (b < u) u = std::min(u, std::max(b, arc_brake(false)));
+      if (b < u) {
+        geo_keys = std::min(geo_keys, b);
+        u = std::min(u, std::max(b, arc_brake(false)));
+      }
     }
   }
 
@@ -1517,6 +1538,14 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   }
   u = std::max(0.0, u);
   if (u <= feed_limit) feed_recover_ = false;
+  // A step above the keys' braking bounds follows 10.'s curve, whose e and W only blocks that
+  // arrive in time may change: late_cap() holds a late block that would move them (6.).
+  const bool geo_relied = arc_t[0] > 0 && u > geo_keys;
+  const bool feed_relied = arc_t[1] > 0 && u > feed_keys;
+  relied_e_mm_ = geo_relied ? arc_at[0].e_mm : feed_relied ? arc_at[1].e_mm : kInf;
+  relied_sigma_e_ = geo_relied ? arc_at[0].sigma_e : arc_at[1].sigma_e;
+  relied_w_geo_ = geo_relied ? arc_at[0].w : kInf;
+  relied_w_feed_ = feed_relied ? arc_at[1].w : kInf;
   // A step from inside a line across its end: after_corner() looks at it in the next cycle.
   crossed_.valid = false;
   if (lag_ == 0 && !buf_.empty() && cur_ >= buf_.begin_index() && cur_ < buf_.end_index()) {

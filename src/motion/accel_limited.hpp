@@ -122,8 +122,12 @@ class AccelLimitedAccDec final : public AccDec {
   // On the tool's arc (slot), the largest step that can still meet the approaching caps when
   // braking with what the speed leaves of the axis budget (10.); 0 when it does not apply.
   // (feed: the feed keys of the override level; else the geometric and lattice keys.)
-  double arc_brake_step(std::size_t slot, const planner::Segment& arc, double or_ratio,
-                        bool feed) const;
+  // `at`: where the curve ends (e, σ(e)) and the target there (W).
+  struct ArcTarget {
+    double e_mm = 0, sigma_e = 0, w = 0;
+  };
+  double arc_brake_step(std::size_t slot, const planner::Segment& arc, double or_ratio, bool feed,
+                        ArcTarget& at) const;
   // The override level whose feed keys the cycle reads (cached for the last override).
   std::size_t level_of(double or_ratio) const;
 
@@ -231,6 +235,12 @@ class AccelLimitedAccDec final : public AccDec {
   double late_sigma_p_ = 0, late_m_ = 0, late_at_mm_ = 0;
   Cap late_range_[2];  // the new block's range caps that are not extensions of earlier ones
   std::size_t n_late_range_ = 0;
+  // The last step relied on 10. (above the braking bounds of the keys): that curve's e and
+  // σ(e), and the W of the keys it was taken for (kInf: not relied on). A late block whose caps
+  // move e back or lower W is held (6.).
+  double relied_e_mm_ = std::numeric_limits<double>::infinity(), relied_sigma_e_ = 0;
+  double relied_w_geo_ = std::numeric_limits<double>::infinity();
+  double relied_w_feed_ = std::numeric_limits<double>::infinity();
   bool late_cap(const Cap& cap) const;
   // Tests late_range_ and the joint's cap (null: none); zone_r < 1: a joint zone of that rate
   // will cover [zone_mm, at_mm] (7.), which lowers σ there.

@@ -291,6 +291,36 @@ TEST(AccelLate, RapidAfterAMicronSegmentArrivingLateKeepsTheLimit) {
   }
 }
 
+// Found by the property below (no filter, slow X/Y): a helix in the XZ plane rising along Y,
+// braking on it for the exact stop of a short G0, with 10.'s arc braking (its curve to W at e,
+// the arc's end). A 1 µm line after a dwell arrived then: its lattice cap (10 000 mm/min, c
+// at the stop) enters V before c, inside the arc, so e moved back and the curve dropped by
+// 1.41·A0 in one cycle: tangential 2 827 > 2 000, X 1 813 > 1 500, Y 1 940 > 800 mm/s².
+TEST(AccelLate, LineAfterADwellArrivingLateWhileAHelixBrakesKeepsEveryLimit) {
+  const MachineConfig m = machine_for(Filter{0, 0}, true);
+  Prog p;
+  p.rapid_to(Vec3{0, 0.001, 0});
+  p.arc_to(Vec3{-1.8454775422013645, 1.841, -0.54665535264949616},
+           Vec3{0, 0.001, -3.3884415613920256}, 6000, Vec3{0, -1, 0});
+  p.rapid_to(Vec3{-1.8876825384157794, 1.856444835357772, -0.57260276513891062});
+  p.blocks.back().path_mode = PathMode::kExactStop;
+  p.dwell(0);
+  p.line_to(Vec3{-1.8886825384157793, 1.856444835357772, -0.57260276513891062}, 3000,
+            PathMode::kExactStop);
+  // The property's arrivals: the helix after 1.2 s at rest, then one block after another.
+  const std::vector<std::uint64_t> ready{0, 1200, 1220, 1221, 1281};
+  const RunResult r = run_late(m, p.blocks, ready);
+  const auto rep = testing::check_trajectory(r.traj, p.blocks, testing::limits_from_config(m));
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+  EXPECT_EQ(r.mismatches, 0u);
+  // The line arriving at every cycle of the braking on the helix (the rest in time).
+  const Ramp ramp = braking_ramp(m, p.blocks, 4);
+  ASSERT_GT(ramp.stop, ramp.brake);
+  for (std::uint64_t at = ramp.brake; at <= ramp.stop; ++at) {
+    run_checked_late(m, p.blocks, 4, at, "line after a dwell, after a helix");
+  }
+}
+
 // Random short programs (lines down to 1 µm, arcs, helices, rapids, exact stops, dwells), each
 // block arriving at a random cycle (often while the tool brakes for the end of the one before),
 // with a jerk stage of 200, 40 or 4 cycles (or none), slow X/Y or every axis at Amax. Not with
