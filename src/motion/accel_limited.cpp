@@ -125,6 +125,12 @@
 //    (same samples: bench_motion --digest). What makes the usual late block followable: the
 //    last V_t = min(A0, a_i)/2 before every stop (V_t is the lowest corner cap, a reversal's) is
 //    run at ≤ V_t, and the lattice's steps landing within V_t of the stop are ≤ V_t.
+//    A step that followed 10.'s curve on an arc (above the keys' bounds) relied on its end e and
+//    target W, which a late block may change: a cap entering before e (a lattice cap's entry
+//    c − V, a joint cap's j − Vg) or a joint zone starting before it moves e back, and a cap
+//    whose bound at σ(e) is below W lowers W. Either holds the block too (found: a 1 µm line
+//    after a dwell, its lattice cap entering 0.11 mm before e while the tool braked on a helix:
+//    the curve fell by 1.41·A0 at once, 2 827 mm/s² tangential).
 //    Not covered: the hold's release inserts every pending cap in one cycle, O(k log n) for the
 //    k blocks that arrived during the hold (once, with the tool at rest), not O(log n).
 //
@@ -415,7 +421,9 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
     // σ(c) − σ_p ≥ d = u²/(2·A0) + u + A0 and both key forms (3.) give a bound ≥ u there.
     const double v_hi =
         std::max({vcap, s.feed_pc * or_max_, have_prev_ ? vcap_[buf_.slot(prev_index_)] : 0.0});
-    const double r_lo = std::max(1e-6, std::min(1.0, r_zone_.min()));
+    // (With this block's own r: the stop's landing bounds below use it, far from d/r_lo on they
+    // are ≥ u as well, 3.)
+    const double r_lo = std::max(1e-6, std::min({1.0, r_zone_.min(), r}));
     const double near_mm = (2 + lag_) * v_hi + (step_ * step_ / (2 * a0_) + step_ + a0_) / r_lo;
     if (pos_mm_ + near_mm >= s.s0_mm) {
       late_m_ = step_;
@@ -437,8 +445,20 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
       late_range_[n_late_range_++] = {c,      s.end_mm() + reach_k[k], v[k], 0,
                                       k == 1, k == 0 && vcap >= a0_};
     }
+    // The stop's landing step and tail cap (3.) use the lowest plain r from the tool up to the
+    // stop: with this block's end as the window's new stop, an r of its own below that lowers
+    // them at once (found: a 0.1 mm helix at r = 0.29 arriving while the tool braked on a line,
+    // T2 = 4: the commanded step fell by 2.02·A0 in one cycle, 2 126 mm/s² after the jerk stage).
+    if (step_ > 0 && r < 1) {
+      const double a_new = std::min(r, r_span(pos_mm_, s.s0_mm).plain) * a0_;
+      const double d = s.end_mm() - pos_mm_;
+      const double vt = tail_cap_pc_;
+      const double tail =
+          d <= vt ? vt : std::sqrt(a_new * a_new + vt * vt + 2 * a_new * (d - vt)) - a_new;
+      if (std::min(landing_step(d, a_new), tail) < step_) start_hold(s.s0_mm);
+    }
     // At a joint, joint_zones() tests them with the σ its zone will leave.
-    if (!joint) check_late(s.s0_mm, 0, 1, nullptr);
+    if (!joint && !late_hold_) check_late(s.s0_mm, 0, 1, nullptr);
   }
   if (joint) joint_zones(prev_index_, slot, s);
   update_r(index);

@@ -321,6 +321,35 @@ TEST(AccelLate, LineAfterADwellArrivingLateWhileAHelixBrakesKeepsEveryLimit) {
   }
 }
 
+// Found by the property below (T2 = 4): a 30 mm line at F6000, braking for the end of a slow
+// 0.1 mm helix, when a fast helix (R 0.1 mm, one extra turn, r = 0.29 on its arc) arrived and
+// its end became the window's stop: the stop's landing bound with the lowest r up to it fell
+// below the braking step at once (2.02·A0 in one cycle, 2 126 mm/s² after the jerk stage).
+TEST(AccelLate, FastHelixArrivingLateWhileALineBrakesKeepsTheLimit) {
+  const MachineConfig m = machine_for(Filter{1e6, 0}, true);
+  Prog p;
+  p.rapid_to(Vec3{0.00092783625389892003, 0, -0.00037298778257580898});
+  p.blocks.back().path_mode = PathMode::kExactStop;
+  p.line_to(Vec3{0.00092783625389892003, 0, -30.727103689056158}, 6000);
+  p.rapid_to(Vec3{-7.2163746101079986e-05, 0, -30.727103689056158});
+  p.arc_to(Vec3{-0.0018174043898294312, 0, -30.727118919540519},
+           Vec3{-7.2163746101079986e-05, 0, -30.827103689056159}, 60, Vec3{0, -1, 0}, 1);
+  p.arc_to(Vec3{-0.0018174043898294312, 1, -30.727118919540519},
+           Vec3{-0.0018174043898294312, 0, -30.827118919540521}, 15000, Vec3{0, -1, 0}, 1);
+  p.blocks.back().path_mode = PathMode::kExactStop;
+  const std::vector<std::uint64_t> ready{0, 5, 25, 175, 325};
+  const RunResult r = run_late(m, p.blocks, ready);
+  const auto rep = testing::check_trajectory(r.traj, p.blocks, testing::limits_from_config(m));
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+  EXPECT_EQ(r.mismatches, 0u);
+  // The fast helix arriving at every cycle of the braking (the rest in time).
+  const Ramp ramp = braking_ramp(m, p.blocks, 4);
+  ASSERT_GT(ramp.stop, ramp.brake);
+  for (std::uint64_t at = ramp.brake; at <= ramp.stop; ++at) {
+    run_checked_late(m, p.blocks, 4, at, "fast helix after a line");
+  }
+}
+
 // Random short programs (lines down to 1 µm, arcs, helices, rapids, exact stops, dwells), each
 // block arriving at a random cycle (often while the tool brakes for the end of the one before),
 // with a jerk stage of 200, 40 or 4 cycles (or none), slow X/Y or every axis at Amax. Not with
@@ -329,9 +358,22 @@ TEST(AccelLate, LineAfterADwellArrivingLateWhileAHelixBrakesKeepsEveryLimit) {
 // overlapping segments and reports speeds that are not there — with blocks in time too (an F60
 // line reversed by a G0: "4.06 mm/s at the joint" for 1 mm/s of motion; accel_filter_test.cpp
 // says the same). The post filter is covered by the programs above.
+// A block in full precision, for turning a shrunk case into a fixed test.
+std::string describe(const Block& b) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "kind %d mode %d feed %.17g end (%.17g, %.17g, %.17g) center (%.17g, %.17g, "
+                "%.17g) normal (%g, %g, %g) turns %u dwell %g",
+                static_cast<int>(b.kind), static_cast<int>(b.path_mode), b.feed_mm_min, b.end[0],
+                b.end[1], b.end[2], b.center.x, b.center.y, b.center.z, b.normal.x, b.normal.y,
+                b.normal.z, b.turns, b.dwell_s);
+  return buf;
+}
+
 RC_GTEST_PROP(AccelLate, RandomProgramsWithLateBlocksKeepEveryLimit, ()) {
   const Filter f{*rc::gen::element(0.0, 20000.0, 100000.0, 1e6), 0.0};
-  const MachineConfig m = machine_for(f, *rc::gen::arbitrary<bool>());
+  const bool slow_axes = *rc::gen::arbitrary<bool>();
+  const MachineConfig m = machine_for(f, slow_axes);
   testing::gen::BlockGenOptions g;
   g.max_blocks = 8;
   const auto blocks = *testing::gen::blocks(g);
@@ -346,8 +388,10 @@ RC_GTEST_PROP(AccelLate, RandomProgramsWithLateBlocksKeepEveryLimit, ()) {
   auto lim = testing::limits_from_config(m);
   const auto rep = testing::check_trajectory(r.traj, blocks, lim);
   if (!rep.ok()) {
-    RC_LOG() << name(f) << ": " << rep.summary() << "\n";
-    for (std::size_t i = 0; i < ready.size(); ++i) RC_LOG() << "ready " << ready[i] << "\n";
+    RC_LOG() << name(f) << (slow_axes ? ", slow X/Y" : "") << ": " << rep.summary() << "\n";
+    for (std::size_t i = 0; i < ready.size(); ++i) {
+      RC_LOG() << "ready " << ready[i] << ": " << describe(blocks[i]) << "\n";
+    }
   }
   RC_ASSERT(rep.ok());
   RC_ASSERT(r.mismatches == 0u);
