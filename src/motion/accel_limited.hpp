@@ -243,8 +243,11 @@ class AccelLimitedAccDec final : public AccDec {
   double relied_w_feed_ = std::numeric_limits<double>::infinity();
   bool late_cap(const Cap& cap) const;
   // Tests late_range_ and the joint's cap (null: none); zone_r < 1: a joint zone of that rate
-  // will cover [zone_mm, at_mm] (7.), which lowers σ there.
-  void check_late(double at_mm, double zone_mm, double zone_r, const Cap* joint_cap);
+  // will cover [zone_mm, at_mm] (7.), which lowers σ there, and re-key the approaching caps of
+  // the segments it reaches back over (index_a and up to kZoneWalk before it).
+  void check_late(double at_mm, double zone_mm, double zone_r, const Cap* joint_cap,
+                  std::uint64_t index_a = 0);
+  bool rekeying_ = false;  // joint_zones() re-keys caps: insert() applies them at once
   void start_hold(double at_mm);
   void release_hold();
 };

@@ -350,6 +350,33 @@ TEST(AccelLate, FastHelixArrivingLateWhileALineBrakesKeepsTheLimit) {
   }
 }
 
+// Found by the property below (T2 = 200, slow X/Y): a 1 µm G0 and a short one arriving while
+// the tool crept along a G0 after a slow line. The first one's joint zone reached back 0.66 mm
+// over the G0 (the jerk stage's lag) and lowered σ under the tool; re-keying the caps there, one
+// of them bound at once, the hold began in the middle and the rest kept their old keys: a
+// 0.54 µm/cycle joint cap met at 4.97 µm/cycle (22 258 mm/s³ on a 20 000 mm/s³ limit).
+TEST(AccelLate, MicronRapidArrivingLateWithALongJerkStageKeepsTheJerkLimit) {
+  const MachineConfig m = machine_for(Filter{20000, 0}, true);
+  Prog p;
+  p.arc_to(Vec3{-0.54729147749336737, 1.02, -0.17782578061800336}, Vec3{0, 0, -0.93110787546783047},
+           3000, Vec3{0, -1, 0});
+  p.line_to(Vec3{-0.64769783722165952, 1.02, -0.17782578061800336}, 60);
+  p.rapid_to(Vec3{-0.21321762361354468, 1.2831305704133305, -0.41576581813436142});
+  p.rapid_to(Vec3{-0.21321762361354468, 1.2821305704133306, -0.41576581813436142});
+  p.rapid_to(Vec3{-0.21363780607435337, 1.2813164818093337, -0.41616670021736218});
+  p.blocks.back().path_mode = PathMode::kExactStop;
+  const std::vector<std::uint64_t> ready{0, 5, 5, 405, 405};
+  const RunResult r = run_late(m, p.blocks, ready);
+  const auto rep = testing::check_trajectory(r.traj, p.blocks, testing::limits_from_config(m));
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+  EXPECT_EQ(r.mismatches, 0u);
+  EXPECT_LE(rep.max_tangential_jerk_mm_s3, m.max_jerk_mm_s3 * 1.005);
+  // The two G0s arriving at other cycles of the creep along the first G0.
+  for (std::uint64_t at : {100, 200, 300, 400, 500, 600, 700, 800, 900}) {
+    run_checked_late(m, p.blocks, 3, at, "1 um rapid with T2 = 200");
+  }
+}
+
 // Random short programs (lines down to 1 µm, arcs, helices, rapids, exact stops, dwells), each
 // block arriving at a random cycle (often while the tool brakes for the end of the one before),
 // with a jerk stage of 200, 40 or 4 cycles (or none), slow X/Y or every axis at Amax. Not with
