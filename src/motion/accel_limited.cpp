@@ -1336,6 +1336,11 @@ double AccelLimitedAccDec::after_corner() {
   const double d1 = std::sqrt(std::max(0.0, alpha * alpha + beta * beta + 2 * alpha * beta * c));
   const double bend = d1 - beta - alpha * c;
   if (bend > 0) hi = std::min(hi, amax * amax / (2 * bend));
+  // At a fold (a reversal, c ≈ −1) the sample before j also lies on b, α past j: a reading of
+  // the positions that takes it there measures the crossing as |β − α| = |d1|, so u2 − |d1| ≤ A0
+  // too (found by the late-block property: 1.0 → 3.0 µm/cycle across a 1.5 µm G0 reversed,
+  // read as 0.99 → 3.0, 2 010 mm/s²).
+  if (c < -0.999) hi = std::min(hi, d1 + amax);
   if (lim_.bound_resultant) {
     const double disc = amax * amax - alpha * alpha * (1 - c * c);
     if (disc < 0) return kInf;

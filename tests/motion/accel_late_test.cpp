@@ -377,6 +377,28 @@ TEST(AccelLate, MicronRapidArrivingLateWithALongJerkStageKeepsTheJerkLimit) {
   }
 }
 
+// Found by the property below (no filter, slow X/Y): a 1.5 µm G0 reversed by the next one,
+// both arriving one cycle after the line before them. The step after the crossing rose by A0
+// (9.), but the sample 0.005 µm before the fold lies on the second G0 as well, and the checker's
+// reading of it there (the lowest speed over the two cycles around it) measures the crossing as
+// |β − α| = 0.99 µm: 0.99 → 3.0 µm/cycle, 2 010 mm/s².
+TEST(AccelLate, RapidReversedRightAfterALateLineKeepsTheTangentialLimit) {
+  const MachineConfig m = machine_for(Filter{0, 0}, true);
+  Prog p;
+  p.line_to(Vec3{-0.001, 0, 0}, 600, PathMode::kExactStop);
+  p.line_to(Vec3{-1.6170053039978906e-06, 0.0035048507341108128, -0.00065789776155734752}, 600);
+  p.rapid_to(Vec3{-1.6170053039978906e-06, 0.0035048507341108128, -0.0021182712835113673});
+  p.rapid_to(Vec3{-1.6170053039978906e-06, 0.0035048507341108128, 0.0045240480503849888});
+  p.blocks.back().path_mode = PathMode::kExactStop;
+  for (std::uint64_t late : {0, 1, 2, 3}) {
+    const std::vector<std::uint64_t> ready{0, 400, 400 + late, 400 + late};
+    const RunResult r = run_late(m, p.blocks, ready);
+    const auto rep = testing::check_trajectory(r.traj, p.blocks, testing::limits_from_config(m));
+    EXPECT_TRUE(rep.ok()) << "G0s " << late << " cycles after the line: " << rep.summary();
+    EXPECT_LE(rep.max_tangential_accel_mm_s2, m.max_accel_mm_s2 * 1.005) << late;
+  }
+}
+
 // Random short programs (lines down to 1 µm, arcs, helices, rapids, exact stops, dwells), each
 // block arriving at a random cycle (often while the tool brakes for the end of the one before),
 // with a jerk stage of 200, 40 or 4 cycles (or none), slow X/Y or every axis at Amax. Not with
