@@ -317,6 +317,37 @@ TEST(TrajectoryChecker, ExactStopMustBeReachedAtRest) {
   EXPECT_TRUE(waited.ok()) << waited.summary();
 }
 
+// An arc with two extra turns (G2 … P3) and an exact stop passes its end point twice before
+// it stops there: those passes at speed are not the stop.
+TEST(TrajectoryChecker, MultiTurnArcPassesItsStopPointBeforeStoppingThere) {
+  // R such that a sample of the trapezoid below (50 mm/s, 1000 mm/s²: cruise samples at
+  // 1.25 + 0.05·m mm) lands on the end point as the tool passes it after 1.25 turns.
+  const double r = (1.25 + 0.05 * 1546) / (2.5 * std::numbers::pi);
+  Block arc;
+  arc.kind = BlockKind::kArc;
+  arc.start = P(r, 0);
+  arc.end = P(0, r);
+  arc.center = {0, 0, 0};
+  arc.normal = {0, 0, 1};
+  arc.turns = 2;
+  arc.feed_mm_min = 3000;
+  arc.line = 1;
+  arc.path_mode = PathMode::kExactStop;
+  const std::vector<Block> blocks = {arc, line(P(0, r), P(0, r + 10), 3000, 2)};
+  const Path path = build_path(blocks);
+  const double l0 = path.segments[0].length_mm;
+  ASSERT_NEAR(l0, 2.25 * 2 * std::numbers::pi * r, 1e-9);
+  auto s = trapezoid(l0, 50, 1000);
+  ASSERT_GT(s.size(), 1600u);
+  const AxisVec at = path.segments[0].point_at(s[1596] / l0);
+  EXPECT_LT(std::hypot(at[kX] - arc.end[kX], at[kY] - arc.end[kY]), 1e-9);
+  for (double x : trapezoid(10, 50, 1000)) s.push_back(l0 + x);
+  const auto rep = check_trajectory(follow(path, s), blocks, Limits{});
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+  ASSERT_FALSE(rep.joints.empty());
+  EXPECT_LE(rep.joints.front().speed_mm_s, 1000 * kTau + 1e-9);
+}
+
 TEST(TrajectoryChecker, EndPointAndEndSpeed) {
   const std::vector<Block> blocks = {line(P(0, 0), P(10, 0), 6000)};
   auto s = trapezoid(10, 50, 1000);

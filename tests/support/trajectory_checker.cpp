@@ -300,9 +300,13 @@ CheckReport check_trajectory(const Trajectory& tr, const Path& path, const Limit
           segs[j].stop_after ? (is_last ? lim.end_tolerance_mm : lim.stop_tolerance_mm) + eps_p
                              : snap;
       auto reached = [&](std::size_t kk) {
-        // (u ≥ 0.5: a full circle ends where it starts; its start does not reach its end.)
-        return proj[kk].seg > j || (proj[kk].seg == j && proj[kk].u >= 0.5 &&
-                                    dist_axes(tr.pos[kk], segs[j].end) <= reach_tol);
+        // Near the end along the path too, not only in space: a full circle ends where it
+        // starts, and an arc with extra turns passes its end point on every turn before it.
+        // (u ≥ 0.5 as before, for segments shorter than the tolerance.)
+        const double left_mm = (1 - proj[kk].u) * segs[j].length_mm;
+        return proj[kk].seg > j ||
+               (proj[kk].seg == j && proj[kk].u >= 0.5 && left_mm <= 2 * reach_tol + eps_p &&
+                dist_axes(tr.pos[kk], segs[j].end) <= reach_tol);
       };
       while (k < n && !reached(k)) ++k;
       JointSpeed js;
