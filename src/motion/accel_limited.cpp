@@ -131,8 +131,8 @@
 //    whose bound at σ(e) is below W lowers W. Either holds the block too (found: a 1 µm line
 //    after a dwell, its lattice cap entering 0.11 mm before e while the tool braked on a helix:
 //    the curve fell by 1.41·A0 at once, 2 827 mm/s² tangential).
-//    Not covered: the hold's release inserts every pending cap in one cycle, O(k log n) for the
-//    k blocks that arrived during the hold (once, with the tool at rest), not O(log n).
+//    The release inserts the pending caps kReleasePerCycle per cycle (O(log n) each) while the
+//    tool waits at rest, so no cycle does more than a bounded number of inserts.
 //
 // 7. Joint zones: a turn and a speed change in the same cycles. Samples P[k] = p(s_k) on a path
 //    with one corner at j (unit tangents E before, S after), steps u1 = s_k − s_{k−1} and
@@ -259,7 +259,8 @@ constexpr double kRecoverShare = 0.98;  // √(a_t² + a_n²) ≤ 0.98·g slowin
 // Joint zones (7.): the speed change allowed at a joint is at least this share of the segments'
 // (below it, the corner's passing speed is lowered instead).
 constexpr double kZoneFloor = 0.25;
-constexpr std::size_t kZoneWalk = 16;  // segments a joint zone may reach back over
+constexpr std::size_t kReleasePerCycle = 32;  // pending caps a cycle inserts (6.)
+constexpr std::size_t kZoneWalk = 16;         // segments a joint zone may reach back over
 
 // The largest step x from which the tool can still stop exactly at distance d with steps that
 // shrink by at most a per cycle: x + (x − a) + (x − 2a) + … (positive terms, the last one ≤ a
@@ -344,6 +345,8 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
   }
   tail_cap_pc_ *= 0.5;
   recent_.assign(std::max<std::size_t>(1, static_cast<std::size_t>(lag_)), 0.0);
+  // At most three caps per buffer slot wait for a hold's release: no allocation when they come.
+  pending_.reserve(3 * buffer.capacity());
 }
 
 double AccelLimitedAccDec::segment_accel_pc2(std::uint64_t index) const {
@@ -618,7 +621,7 @@ void AccelLimitedAccDec::insert(std::size_t pos, const Cap& cap) {
   // (A cap the checks in on_segment() did not foresee, e.g. on_joint()'s lower cap for two
   // corners within one cycle, still holds the block when it binds at once.)
   if (!rekeying_ && !late_hold_ && late_check_ && late_cap(cap)) start_hold(late_at_mm_);
-  if (late_hold_ && !rekeying_) {
+  if (late_hold_ && !rekeying_ && !releasing_) {
     pending_.emplace_back(pos, cap);  // takes effect when the hold ends (release_hold())
     return;
   }
@@ -825,9 +828,13 @@ void AccelLimitedAccDec::start_hold(double at_mm) {
 }
 
 void AccelLimitedAccDec::release_hold() {
-  late_hold_ = false;
+  // kReleasePerCycle caps per cycle, so the cycle stays O(log n); the tool waits at rest at
+  // hold_mm_ until the last one is in (blocks arriving meanwhile queue behind them).
   late_check_ = false;  // (the inserts below are not a block's arrival)
-  for (auto& [pos, cap] : pending_) {
+  releasing_ = true;
+  const std::size_t end = std::min(pending_.size(), pending_next_ + kReleasePerCycle);
+  for (; pending_next_ < end; ++pending_next_) {
+    auto& [pos, cap] = pending_[pending_next_];
     // σ ahead may have moved since (joint zones of later blocks): keys with the exact σ(c), 7.
     cap.sigma_c = sigma_at(cap.c_mm);
     if (pos % 3 == 2 && cap.v < a0_) {
@@ -835,7 +842,12 @@ void AccelLimitedAccDec::release_hold() {
     }
     insert(pos, cap);  // in arrival order: a later cap at the same position replaces it
   }
-  pending_.clear();
+  releasing_ = false;
+  if (pending_next_ == pending_.size()) {
+    pending_.clear();
+    pending_next_ = 0;
+    late_hold_ = false;
+  }
   cached_stop_mm_ = -1;
 }
 

@@ -291,6 +291,27 @@ TEST(AccelLate, RapidAfterAMicronSegmentArrivingLateKeepsTheLimit) {
   }
 }
 
+// A held late corner followed by 300 short blocks that arrive while the hold lasts: their caps
+// wait and are inserted a bounded number per cycle with the tool at rest (6.), so the release
+// takes several cycles; every limit holds and the tool reaches the end.
+TEST(AccelLate, ManyBlocksArrivingDuringAHoldAreReleasedOverSeveralCycles) {
+  for (const Filter f : {Filter{0, 0}, Filter{20000, 0}, Filter{0, 0.016}}) {
+    const MachineConfig m = machine_for(f);
+    Prog p = corner(90);
+    const double a1 = kPi / 6 + kPi / 2;
+    for (int i = 0; i < 300; ++i) {
+      const double turn = (i % 2 == 0 ? 1 : -1) * 0.2;  // a gentle zig-zag of 0.1 mm lines
+      p.line_to(p.pos.xyz() + Vec3{0.1 * std::cos(a1 + turn), 0.1 * std::sin(a1 + turn), 0}, 6000);
+    }
+    p.blocks.back().path_mode = PathMode::kExactStop;
+    const Ramp ramp = braking_ramp(m, p.blocks, 1);
+    ASSERT_GT(ramp.stop, ramp.brake) << name(f);
+    for (std::uint64_t at : arrival_points(ramp, lag_cycles(m))) {
+      run_checked_late(m, p.blocks, 1, at, "300 blocks after a late corner, " + name(f));
+    }
+  }
+}
+
 // Found by the property below (no filter, slow X/Y): a helix in the XZ plane rising along Y,
 // braking on it for the exact stop of a short G0, with 10.'s arc braking (its curve to W at e,
 // the arc's end). A 1 µm line after a dwell arrived then: its lattice cap (10 000 mm/min, c
