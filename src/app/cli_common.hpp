@@ -52,6 +52,8 @@ class ProgressObserver : public sim::SampleObserver {
   ~ProgressObserver() override { clear(); }
   void on_sample(const motion::Sample& s) override;
   void on_finish() override { clear(); }
+  // False when stderr is not a terminal: then it shows nothing and need not be called at all.
+  bool enabled() const { return enabled_; }
 
  private:
   using Clock = std::chrono::steady_clock;

@@ -24,6 +24,11 @@ struct CycleDifferences {
   double length_mm = 0, speed_mm_s = 0;
   double tangential_accel_mm_s2 = 0;  // signed
   double path_accel_mm_s2 = 0;        // resultant, ≥ 0
+  // update_deltas() only (update() leaves them alone): the numerators of the accelerations,
+  // acc = dv / h_s, tangential = dspeed / h_s, path = √dv2 / h_s.
+  AxisVec dv;         // v_k − v_{k−1} per axis (per s)
+  double dspeed = 0;  // speed_k − speed_{k−1} (mm/s)
+  double dv2 = 0;     // |v_k − v_{k−1}|² over the linear axes
 };
 
 class FiniteDifferences {
@@ -37,17 +42,34 @@ class FiniteDifferences {
 
   // The next set-point; the result stays valid until the next call.
   const CycleDifferences& update(double t_s, const AxisVec& position) {
+    return advance<true>(t_s, position);
+  }
+  // The same without the accelerations' divisions and square root: acc, tangential and path
+  // acceleration are left unset, their numerators dv, dspeed, dv2 are set instead (for a caller
+  // that keeps only maxima and can skip most divisions: summary.cpp). Velocities, length and
+  // speed as update(); both may be mixed (the state carried between calls is the same).
+  const CycleDifferences& update_deltas(double t_s, const AxisVec& position) {
+    return advance<false>(t_s, position);
+  }
+
+  const CycleDifferences& last() const { return d_; }
+
+ private:
+  template <bool kAccel>
+  const CycleDifferences& advance(double t_s, const AxisVec& position) {
     d_.moved = d_.accel = false;
     if (have_prev_) {
       const double dt = t_s - prev_t_;
       if (dt > 0) {
+        // Every axis slot without a branch per axis (the loops vectorise): a disabled axis
+        // gets d = 0, so its velocity and acceleration are 0; a non-linear one adds 0 to the
+        // squared length. The same doubles as skipping them (x + 0 = x, 0 / dt = 0).
         AxisVec vel;
         double len2 = 0;
         for (std::size_t i = 0; i < kMaxAxes; ++i) {
-          if (!enabled_[i]) continue;
-          const double d = position[i] - prev_pos_[i];
+          const double d = enabled_[i] ? position[i] - prev_pos_[i] : 0.0;
           vel[i] = d / dt;
-          if (linear_[i]) len2 += d * d;
+          len2 += linear_[i] ? d * d : 0.0;
         }
         d_.moved = true;
         d_.dt_s = dt;
@@ -57,15 +79,23 @@ class FiniteDifferences {
           const double h = 0.5 * (dt + prev_dt_);
           double dv2 = 0;
           for (std::size_t i = 0; i < kMaxAxes; ++i) {
-            if (!enabled_[i]) continue;
             const double dv = vel[i] - d_.vel[i];
-            d_.acc[i] = dv / h;
-            if (linear_[i]) dv2 += dv * dv;
+            if constexpr (kAccel) {
+              d_.acc[i] = dv / h;
+            } else {
+              d_.dv[i] = dv;
+            }
+            dv2 += linear_[i] ? dv * dv : 0.0;
           }
           d_.accel = true;
           d_.h_s = h;
-          d_.path_accel_mm_s2 = std::sqrt(dv2) / h;
-          d_.tangential_accel_mm_s2 = (d_.speed_mm_s - prev_speed_) / h;
+          if constexpr (kAccel) {
+            d_.path_accel_mm_s2 = std::sqrt(dv2) / h;
+            d_.tangential_accel_mm_s2 = (d_.speed_mm_s - prev_speed_) / h;
+          } else {
+            d_.dv2 = dv2;
+            d_.dspeed = d_.speed_mm_s - prev_speed_;
+          }
         }
         d_.vel = vel;
         prev_speed_ = d_.speed_mm_s;
@@ -79,9 +109,6 @@ class FiniteDifferences {
     return d_;
   }
 
-  const CycleDifferences& last() const { return d_; }
-
- private:
   bool enabled_[kMaxAxes] = {};
   bool linear_[kMaxAxes] = {};
   bool have_prev_ = false, have_vel_ = false;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "io/atomic_file.hpp"
@@ -20,6 +21,28 @@ constexpr std::size_t kMatchWindow = 16;  // blocks searched ahead when the line
 std::string axis_name(std::size_t i) {
   return std::string(1,
                      static_cast<char>(std::tolower(static_cast<unsigned char>(kAxisLetters[i]))));
+}
+
+// m = max(m, a / h) for a ≥ 0 (or NaN) and h > 0, dividing only when the quotient can matter.
+// When a < b = m·h·(1 − 10⁻⁹) (b normal; every product rounded once, relative error ≤ 2⁻⁵³),
+// a/h rounded is below m·(1 − 10⁻⁹)·(1 + 2⁻⁵³)³ < m: max keeps m, so the result is the same
+// double as dividing every time (m·h overflowing to b = ∞: a/h ≤ DBL_MAX/h < m). Almost every cycle
+// takes the early return once the run's maximum has been reached.
+constexpr double kBelow = 1 - 1e-9;
+inline void raise_max_quotient(double& m, double a, double h) {
+  if (!(a > 0)) return;  // a/h is 0 or NaN, which max never takes over m ≥ 0 (idle axes)
+  const double b = m * h * kBelow;
+  if (b >= std::numeric_limits<double>::min() && a < b) return;
+  m = std::max(m, a / h);
+}
+// m = max(m, √q / h), q ≥ 0 (or NaN): q < b² with b as above gives √q / h < m the same way
+// (b² rounded once more, the root once: still far inside the 10⁻⁹ margin).
+inline void raise_max_root_quotient(double& m, double q, double h) {
+  if (!(q > 0)) return;  // as above
+  const double b = m * h * kBelow;
+  const double b2 = b * b;
+  if (b2 >= std::numeric_limits<double>::min() && q < b2) return;
+  m = std::max(m, std::sqrt(q) / h);
 }
 
 // Distance from p to the segment a-b.
@@ -47,8 +70,9 @@ SummaryObserver::SummaryObserver(const MachineConfig& machine, std::string mode)
   for (std::size_t i = 0; i < kMaxAxes; ++i) {
     const AxisConfig& a = machine.axes[i];
     if (a.enabled) travel_unwarned_ |= 1u << i;
-    travel_lo_mm_[i] = a.min_mm - kSlack;
-    travel_hi_mm_[i] = a.max_mm + kSlack;
+    // Not checked: limits no position leaves (travel_check tests every axis).
+    travel_lo_mm_[i] = a.enabled ? a.min_mm - kSlack : -std::numeric_limits<double>::infinity();
+    travel_hi_mm_[i] = a.enabled ? a.max_mm + kSlack : std::numeric_limits<double>::infinity();
   }
 }
 
@@ -82,12 +106,12 @@ void SummaryObserver::on_block(const Block& b) {
 // The programmed feed of the block now executing on `line` (F clamped to the machine's limit),
 // matched in order against the blocks handed to the kernel. Returns -1 when unknown.
 const SummaryObserver::Pending* SummaryObserver::current_block(std::uint32_t line) {
-  // Nearly every sample is on the block at the front: no deque indexing then.
+  // Nearly every sample is on the block at the front: no ring indexing then.
   if (!pending_.empty() && pending_.front().line == line) return &pending_.front();
   const std::size_t n = std::min(pending_.size(), kMatchWindow);
   for (std::size_t j = 0; j < n; ++j) {
     if (pending_[j].line == line) {
-      pending_.erase(pending_.begin(), pending_.begin() + static_cast<std::ptrdiff_t>(j));
+      pending_.drop_front(j);
       return &pending_.front();
     }
   }
@@ -119,14 +143,27 @@ void SummaryObserver::close_group() {
   group_ = SlowSpot{};
 }
 
-void SummaryObserver::travel_check(const motion::Sample& s) {
-  if (travel_unwarned_ == 0) return;
+inline void SummaryObserver::travel_check(const motion::Sample& s) {
+  // Every axis at once, without a branch per axis: the limits of axes not checked (disabled,
+  // or already warned) are ±∞, which no position leaves (a NaN leaves none either).
+  bool outside = false;
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    const double p = s.position[i];
+    outside = outside | (p < travel_lo_mm_[i]) | (p > travel_hi_mm_[i]);
+  }
+  if (outside) travel_warn(s);
+}
+
+// Out of line: the check above stays small enough to inline into on_sample.
+void SummaryObserver::travel_warn(const motion::Sample& s) {
   for (std::size_t i = 0; i < kMaxAxes; ++i) {
     if ((travel_unwarned_ & (1u << i)) == 0) continue;
     const AxisConfig& a = machine_.axes[i];
     const double p = s.position[i];
     if (p < travel_lo_mm_[i] || p > travel_hi_mm_[i]) {
       travel_unwarned_ &= ~(1u << i);
+      travel_lo_mm_[i] = -std::numeric_limits<double>::infinity();
+      travel_hi_mm_[i] = std::numeric_limits<double>::infinity();
       const char* unit = a.rotary ? "deg" : "mm";
       summary_.warnings.push_back(fmt::format(
           "axis {} leaves its travel at line {} (t = {:.3f} s): {} = {:.3f} {}, travel {} … {} {}",
@@ -197,11 +234,14 @@ void SummaryObserver::on_sample(const motion::Sample& s) {
   {
     // Velocity over the last cycle (at the middle of the interval) and second differences
     // a = (v_k − v_{k−1}) / (distance between interval midpoints): io/differences.hpp.
-    const CycleDifferences& d = diff_.update(s.t_s, s.position);
+    // The accelerations only as maxima: update_deltas() leaves their divisions to
+    // raise_max_quotient (|Δv / h| = |Δv| / h exactly: rounding is symmetric).
+    const CycleDifferences& d = diff_.update_deltas(s.t_s, s.position);
     if (d.moved) {
       const double dt = d.dt_s;
+      // Every axis, without a branch: a disabled axis has vel = acc = 0 (differences.hpp), so
+      // its maxima stay 0.
       for (std::size_t i = 0; i < kMaxAxes; ++i) {
-        if (!machine_.axes[i].enabled) continue;
         summary_.max_axis_speed_mm_min[i] =
             std::max(summary_.max_axis_speed_mm_min[i], std::fabs(d.vel[i]) * 60);
       }
@@ -210,14 +250,12 @@ void SummaryObserver::on_sample(const motion::Sample& s) {
       summary_.path_length_mm += len;
       summary_.max_feed_mm_min = std::max(summary_.max_feed_mm_min, speed * 60);
       if (d.accel) {
+        const double h = d.h_s;
         for (std::size_t i = 0; i < kMaxAxes; ++i) {
-          if (!machine_.axes[i].enabled) continue;
-          summary_.max_axis_accel_mm_s2[i] =
-              std::max(summary_.max_axis_accel_mm_s2[i], std::fabs(d.acc[i]));
+          raise_max_quotient(summary_.max_axis_accel_mm_s2[i], std::fabs(d.dv[i]), h);
         }
-        summary_.max_path_accel_mm_s2 = std::max(summary_.max_path_accel_mm_s2, d.path_accel_mm_s2);
-        summary_.max_tangential_accel_mm_s2 =
-            std::max(summary_.max_tangential_accel_mm_s2, std::fabs(d.tangential_accel_mm_s2));
+        raise_max_root_quotient(summary_.max_path_accel_mm_s2, d.dv2, h);
+        raise_max_quotient(summary_.max_tangential_accel_mm_s2, std::fabs(d.dspeed), h);
       }
       // Slowest spots: time lost on this line against its programmed feed × override.
       if (s.line != group_.line) {

@@ -12,6 +12,7 @@
 
 #include "config/machine_config.hpp"
 #include "io/differences.hpp"
+#include "io/fifo.hpp"
 #include "simulation/run.hpp"
 
 namespace cncore::io {
@@ -113,12 +114,13 @@ class SummaryObserver : public sim::SampleObserver {
   const Pending* current_block(std::uint32_t line);
   void close_group();
   void travel_check(const motion::Sample& s);
+  [[gnu::noinline, gnu::cold]] void travel_warn(const motion::Sample& s);
 
   MachineConfig machine_;
   Summary summary_;
   // Programmed feed of the blocks handed to the kernel and not yet executed (bounded by the
   // kernel's buffer capacity).
-  std::deque<Pending> pending_;
+  GrowingFifo<Pending> pending_;
   FiniteDifferences diff_;  // velocities and accelerations of the set-points
   // Recent on-path points: the servo set-point lags behind on the path (post-interpolation
   // filter), so its contour error is the distance to the nearest of these path segments.
@@ -128,7 +130,8 @@ class SummaryObserver : public sim::SampleObserver {
   SlowSpot group_;
   std::vector<SlowSpot> top_;  // bounded candidate set, merged by line
   // travel_check: bit i set while enabled axis i has not left its travel yet; the limits with
-  // their slack, computed once (the same doubles as computing them per sample).
+  // their slack, computed once (the same doubles as computing them per sample); ±∞ for an axis
+  // not checked (disabled, or already warned).
   unsigned travel_unwarned_ = 0;
   std::array<double, kMaxAxes> travel_lo_mm_{}, travel_hi_mm_{};
   bool record_sample_events_ = true;

@@ -83,6 +83,9 @@ struct Kernel::Impl {
 
   void set_override(double pct) {
     override_pct = std::clamp(std::isfinite(pct) ? pct : 0.0, 0.0, machine.max_override_pct);
+    // Divided here, once per change, not every cycle: the ratio starts the cycle's chain of
+    // dependent operations (Uc = F·OR → limiter → filter → point).
+    or_ratio = override_pct / 100.0;
   }
 
   // A block takes up to three items: a stop before it, itself, an exact stop after it. The items
@@ -324,7 +327,7 @@ struct Kernel::Impl {
   // position decides, as it does for the feed inside the acc/dec (a switch at a joint acts like
   // an override change there, which the look-ahead handles for any override ≤ ORmax).
   double cycle_or_ratio() {
-    const double r = override_pct / 100.0;
+    const double r = or_ratio;
     if (!any_fixed || buf.empty()) return r;
     const double cmd = acc.commanded_mm();
     cmd_idx = std::max(cmd_idx, buf.begin_index());
@@ -394,6 +397,7 @@ struct Kernel::Impl {
 
   bool ended = false, started = false, hold = false;
   double override_pct = 100;
+  double or_ratio = 1;  // override_pct / 100 (set_override)
   std::uint64_t cycle = 0;
   std::uint64_t out_idx = 0;
   bool any_fixed = false;     // some segment ignores the override (correction "replace")

@@ -17,7 +17,8 @@ namespace cncore::motion {
 // Moving average over `len` cycles as a running sum in a fixed ring: O(1) per cycle.
 class MovingAverage {
  public:
-  explicit MovingAverage(std::uint32_t len) : ring_(len > 0 ? len : 1, 0.0) {}
+  explicit MovingAverage(std::uint32_t len)
+      : ring_(len > 0 ? len : 1, 0.0), len_(static_cast<double>(ring_.size())) {}
   double push(double u) {
     const double old = ring_[pos_];
     ring_[pos_] = u;
@@ -26,13 +27,17 @@ class MovingAverage {
     nonzero_ += (u != 0 ? 1 : 0);
     nonzero_ -= (old != 0 ? 1 : 0);
     if (nonzero_ == 0) sum_ = 0;  // exact zero at rest (no rounding residue)
-    const double out = sum_ / static_cast<double>(ring_.size());
+    // sum / 1 is sum exactly: a one-cycle stage (no jerk stage, T2 = 1) skips the division,
+    // which sits on the chain from the commanded step to the sample in every cycle.
+    const double out = single_ ? sum_ : sum_ / len_;
     return out > 0 ? out : 0;
   }
   bool at_rest() const { return nonzero_ == 0; }
 
  private:
   std::vector<double> ring_;
+  double len_;                       // ring size as a double (no conversion per cycle)
+  bool single_ = ring_.size() == 1;  // one cycle: the average is the sum itself
   std::size_t pos_ = 0;
   double sum_ = 0;
   std::uint32_t nonzero_ = 0;

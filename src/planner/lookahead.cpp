@@ -43,12 +43,20 @@ void Lookahead::enter_range(std::size_t slot) {
 }
 
 void Lookahead::clear(std::size_t slot) {
-  if (state_[slot] == State::kEmpty) return;
-  w_.set(slot, MinTree::kEmpty);
-  r_.set(slot, MinTree::kEmpty);
-  geo_.set(slot, MinTree::kEmpty);
-  feed_.set(slot, MinTree::kEmpty);
-  release_.set(slot, MinTree::kEmpty);
+  // Only the trees the point's state has it in (insert and enter_range leave the others
+  // empty): two tree updates instead of five, for every point of every block.
+  switch (state_[slot]) {
+    case State::kEmpty:
+      return;
+    case State::kApproaching:
+      w_.set(slot, MinTree::kEmpty);
+      r_.set(slot, MinTree::kEmpty);
+      break;
+    case State::kInRange:
+      (points_[slot].feed ? feed_ : geo_).set(slot, MinTree::kEmpty);
+      release_.set(slot, MinTree::kEmpty);
+      break;
+  }
   state_[slot] = State::kEmpty;
 }
 

@@ -38,11 +38,13 @@ class MinTree {
     const std::size_t skew = (64 - addr % 64) % 64 / sizeof(double);
     for (auto& o : offset_) o += skew;
     top_ = offset_.size() - 1;
+    root_ = offset_[top_];
   }
 
   std::size_t leaves() const { return size_; }
   double at(std::size_t i) const { return storage_[offset_[0] + i]; }
-  double min() const { return storage_[offset_[top_]]; }
+  // The root's slot is kept: read every cycle for several trees (one load less each).
+  double min() const { return storage_[root_]; }
 
   void set(std::size_t i, double value) {
     storage_[offset_[0] + i] = value;
@@ -89,6 +91,7 @@ class MinTree {
   std::size_t size_;
   std::vector<std::size_t> offset_;                         // start of each level in storage_
   std::size_t top_ = 0;                                     // the root's level
+  std::size_t root_ = 0;                                    // offset_[top_]: the root's slot
   std::vector<double, HugePageAllocator<double>> storage_;  // huge_pages.hpp: cheap to touch
 };
 

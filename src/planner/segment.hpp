@@ -90,13 +90,14 @@ inline AxisVec Segment::point_at(double u_mm) const {
   if (u_mm >= length_mm) return end;
   if (u_mm <= 0) return start;
   const double f = u_mm / length_mm;
-  AxisVec p = start + f * (end - start);
-  if (arc) {
-    const double phi = f * sweep_rad;
-    const double r = r0 + (r1 - r0) * f;
-    p.set_xyz(center + (r * std::cos(phi)) * e1 + (r * std::sin(phi)) * e2 + (rise_mm * f) * n);
-  }
-  return p;
+  const AxisVec p = start + f * (end - start);
+  if (!arc) return p;
+  const double phi = f * sweep_rad;
+  const double r = r0 + (r1 - r0) * f;
+  const Vec3 q = center + (r * std::cos(phi)) * e1 + (r * std::sin(phi)) * e2 + (rise_mm * f) * n;
+  // Built whole rather than by overwriting x, y, z of p: the caller copies the point in 16-byte
+  // pairs, and a pair loaded over two separate 8-byte stores (z, a) cannot be forwarded.
+  return AxisVec{{q.x, q.y, q.z, p[kA], p[kB], p[kC]}};
 }
 
 // Builds a motion segment (kRapid, kLine, kArc) with its length and Vb. Zero-length moves give

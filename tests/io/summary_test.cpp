@@ -4,7 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <deque>
 #include <nlohmann/json.hpp>
 
 #include "test_dir.hpp"
@@ -209,6 +213,84 @@ TEST(Summary, JsonHasTheSpecKeys) {
   write_summary_json((dir / "s.json").string(), obs.summary(), default_machine_config());
   EXPECT_EQ(nlohmann::json::parse(test::slurp(dir / "s.json")), j);
   EXPECT_EQ(test::list_dir(dir), std::vector<std::string>{"s.json"});
+}
+
+// The summary keeps the accelerations only as maxima and divides only when a quotient can raise
+// one (raise_max_quotient in summary.cpp). Its maxima must be the very doubles of taking the max
+// of every cycle's FiniteDifferences::update(): a random walk with jumps, stalls, cycles that
+// repeat the last acceleration (the early-return case), uneven sample times and a rotary axis.
+TEST(Summary, AccelerationMaximaAreBitIdenticalToDividingEveryCycle) {
+  MachineConfig m = default_machine_config();
+  m.axes[kA].enabled = true;
+  m.axes[kA].rotary = true;
+  m.axes[kA].min_mm = -1e9;
+  m.axes[kA].max_mm = 1e9;
+  SummaryObserver obs(m, "lookahead");
+  FiniteDifferences ref(m);
+  std::array<double, kMaxAxes> axis{};
+  double path = 0, tangential = 0;
+  std::uint64_t state = 12345;
+  auto uniform = [&state] {  // xorshift64*: reproducible, in [0, 1)
+    state ^= state >> 12;
+    state ^= state << 25;
+    state ^= state >> 27;
+    return static_cast<double>((state * 2685821657736338717ull) >> 11) * 0x1.0p-53;
+  };
+  AxisVec p, v;
+  double t = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const double r = uniform();
+    if (r < 0.05) {
+      v = AxisVec{};  // stop
+    } else if (r < 0.10) {
+      for (std::size_t i = 0; i < 4; ++i) v[i] = 200 * (uniform() - 0.5);  // jump
+    } else if (r < 0.6) {
+      for (std::size_t i = 0; i < 4; ++i) v[i] += 1e-3 * (uniform() - 0.5);  // small change
+    }  // else: the same velocity again
+    t += kTau * (r < 0.01 ? 2.0 : 1.0) * (1 + 1e-9 * uniform());
+    p = p + kTau * v;
+    motion::Sample s = at(t, 1, p.xyz());
+    s.position[kA] = p[kA];
+    s.path_position = s.position;
+    obs.on_sample(s);
+    const CycleDifferences& d = ref.update(t, s.position);
+    if (!d.accel) continue;
+    for (std::size_t i = 0; i < kMaxAxes; ++i) axis[i] = std::max(axis[i], std::fabs(d.acc[i]));
+    path = std::max(path, d.path_accel_mm_s2);
+    tangential = std::max(tangential, std::fabs(d.tangential_accel_mm_s2));
+  }
+  const Summary& s = obs.summary();
+  ASSERT_GT(path, 0.0);
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    EXPECT_EQ(s.max_axis_accel_mm_s2[i], axis[i]) << "axis " << i;
+  }
+  EXPECT_EQ(s.max_path_accel_mm_s2, path);
+  EXPECT_EQ(s.max_tangential_accel_mm_s2, tangential);
+}
+
+// The queue of pending blocks against std::deque through growth and wrap-around.
+TEST(GrowingFifo, BehavesLikeADeque) {
+  GrowingFifo<int> fifo;
+  std::deque<int> ref;
+  int next = 0;
+  for (int round = 0; round < 2000; ++round) {
+    const int pushes = round % 7 == 0 ? 150 : round % 3;
+    for (int i = 0; i < pushes; ++i) {
+      fifo.push_back(next);
+      ref.push_back(next);
+      ++next;
+    }
+    const std::size_t drop = std::min<std::size_t>(ref.size(), round % 5 == 0 ? 40 : 1);
+    fifo.drop_front(drop);
+    ref.erase(ref.begin(), ref.begin() + static_cast<std::ptrdiff_t>(drop));
+    ASSERT_EQ(fifo.size(), ref.size());
+    ASSERT_EQ(fifo.empty(), ref.empty());
+    for (std::size_t j = 0; j < ref.size(); j += 17) ASSERT_EQ(fifo[j], ref[j]);
+    if (!ref.empty()) {
+      ASSERT_EQ(fifo.front(), ref.front());
+      ASSERT_EQ(fifo.back(), ref.back());
+    }
+  }
 }
 
 }  // namespace
