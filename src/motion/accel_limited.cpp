@@ -1038,6 +1038,32 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
       v0 = reach;
     }
   }
+  // At gentle corners the segments' caps (the machine's top speed) are far above a CAM
+  // program's feed, and the zone sized for them let the speed change by little more than the
+  // floor's share (bench/README (c)). Sized for F instead, with a joint cap of F so that it
+  // holds at any override: F the highest feed of the segments the pairs around the joint can
+  // start in, [j − (2 + lag)·V, j + V] (b at least V long, the walk back over at most
+  // kZoneWalk segments ahead of the tool's), so that at ≤ 100 % the cap costs nothing. Only
+  // where that leaves the speed change more room (below). Sizing for OR_max·F without a cap
+  // instead changed nothing on the built-in machine (200 % of F 6 000 is above its top speed).
+  const double v_feed = [&] {
+    double vf = std::max(a.feed_pc, b.feed_pc);
+    if (!(b.length_mm >= vf)) return kInf;
+    double from = a.s0_mm;
+    std::size_t walked = 0;
+    for (std::uint64_t k = index_a; from > a.end_mm() - (2 + lag_) * vf;) {
+      if (k <= std::max(cur_, buf_.begin_index())) return kInf;  // the tool's segment
+      const Segment& x = buf_[--k];
+      if (x.kind != ItemKind::kMotion) {
+        if (x.barrier) break;  // a stop: no step crosses it
+        continue;
+      }
+      if (++walked > kZoneWalk) return kInf;
+      vf = std::max(vf, x.feed_pc);
+      from = x.s0_mm;
+    }
+    return vf;
+  }();
   // Arcs next to the joint: a step of length u on an arc of curvature κ leaves its tangent's
   // line by R(1 − cos φ) ≤ u²κ/2 along the normal N (φ = uκ) and falls short along it by
   // u − R sin φ ≤ u³κ²/6; N turns by ≤ uκ over the step. Per axis ≤ (u²κ/2)(|N_i| + uκ·h_i)
@@ -1083,6 +1109,16 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     return d;
   };
   double d = d_max(v0);
+  // Only where the feed leaves the speed change more room than the passing speed does (at
+  // 100 % the cap then costs nothing; where the zone allows the segments' r anyway it would
+  // only add a cap that holds the corner at F above 100 %).
+  if (v_feed < v0) {
+    const double d_feed = d_max(v_feed);
+    if (d_feed > 1.001 * d) {
+      v0 = v_feed;
+      d = d_feed;
+    }
+  }
   double vj = v0;
   const double floor = kZoneFloor * r_ab * a0_;
   if (d < floor) {
@@ -1151,19 +1187,21 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     }
     vj = std::min(vj, zone_chain_vg_);
   }
-  zone_vg_ = vj;
+  // The joint's cap: the passing speed, or lower where the floor or a chain needs it.
+  const double cap_v = std::min(vj, zone_chain_vg_);
+  zone_vg_ = cap_v;
   zone_joint_pc_ = corner;
   zone_index_a_ = index_a;
   const double rj = std::max(d / a0_, 1e-6);
   // Every step within V of the joint is ≤ V: the joint cap's Vg when there is one, else the
   // segments' caps.
-  const double v = vj < 0.999 * around ? vj : around;
+  const double v = std::min(cap_v < 0.999 * around ? cap_v : around, v_feed);
   const double zone_from = a.end_mm() - (2 + lag_) * v - chain_mm;
   if (late_check_ && !late_hold_) {
     // The block's range caps and the joint cap on_joint() will set (6.), with σ(c) no higher
     // than the zone below leaves it (r ≥ min(r_lo, r_j) over [zone start, c]).
     Cap joint_cap{0, 0, 0, 0, false, false};
-    const double vg = std::min({corner, around, vj});
+    const double vg = std::min({corner, around, cap_v});
     if (vg < 0.999 * around) {
       const double w = vg * (1 + lag_);
       joint_cap = {a.end_mm() - w, a.end_mm() + w, vg, 0, false, vg >= a0_};
