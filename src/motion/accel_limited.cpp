@@ -171,6 +171,19 @@
 //    Keys use the exact σ(c) (a σ below the true one lets the bound reach 0 before c, a stall).
 //    Not covered: a zone reaching back over more than kZoneWalk segments (tiny segments with a
 //    sharp corner: the corner cap then keeps V small, so 2V spans few of them).
+//    Chains: when a (and the segment before it) is shorter than a step, one pair of steps can
+//    turn from E (the end of the segment before the chain) to S at once, the middle tangent M
+//    over length L between. The extremes are then u2·S − u1·E + L·(E − M) (the sample on the
+//    last joint, step 1 over the whole chain) and u2·S − u1·E + L·(M − S) (on the first, step 2
+//    over it); with M_i = λE_i + (1 − λ)S_i, λ ∈ [0, 1], both are (u2 − u1)·S_i + c·(S_i − E_i)
+//    with c = u1 − (1 − λ)L or u1 − λL, inside the range of c above: the vertex bounds hold with
+//    E and S, each axis less L·(how far M_i lies outside [E_i, S_i]). So the zone of the chain's
+//    last joint also meets them for the turn E → S at the chain's V (the lower of both joints'
+//    caps), and reaches back over the middle (the pairs' steps lie in [c − 2V, j + V], c the
+//    first corner); below the floor the chain is passed at the V that fits the floor — a cap on
+//    both joints — or, if that is below L, at L (no step then skips the middle, and each
+//    corner's own zone holds). Sized for the turn alone (the speed change left to the zones of
+//    the single corners), a 1.3 µm line between two corners gave 1 407 mm/s² on a 1 400 axis.
 //
 // 8. Jerk stage and post filter. With a jerk limit the tool's step is the moving average of the
 //    last T2 commanded steps (T2 = ⌈2·Amax/(Jmax·τ)⌉, planner::make_limits): its acceleration is
@@ -284,6 +297,74 @@ double above(double x) {
 
 double component(const Vec3& v, std::size_t i) {
   return i == 0 ? v.x : (i == 1 ? v.y : v.z);
+}
+
+// Segments shorter than a step between corners (a chain, 7.): tangent at both ends, length,
+// sweep (0 on a line).
+struct ChainMid {
+  AxisVec start_dir, end_dir;
+  double len_mm = 0, sweep_rad = 0;
+};
+
+// A chain's share of axis i beyond the turn from e to s: with the middle tangent M over length
+// L, the extremes of the second difference over the whole chain (7.: a sample on its first or
+// last joint, one step over all of it) are u2·S − u1·E + L·(E − M) and u2·S − u1·E + L·(M − S).
+// M_i = λE_i + (1 − λ)S_i with λ ∈ [0, 1] makes them (u2 − u1)·S_i + c·(S_i − E_i) with
+// c = u1 − (1 − λ)·L or u1 − λ·L, inside 7.'s range of c: the turn from E to S alone. M_i
+// outside [E_i, S_i] by ε adds ≤ L·ε (an arc's tangent moves by ≤ its sweep).
+double chain_slack(const AxisVec& e, const AxisVec& s, const ChainMid* mid, std::size_t n,
+                   std::size_t i) {
+  const double lo = std::min(e[i], s[i]), hi = std::max(e[i], s[i]);
+  double slack = 0;
+  for (std::size_t m = 0; m < n; ++m) {
+    const double out = std::max({0.0, mid[m].start_dir[i] - hi, lo - mid[m].start_dir[i],
+                                 mid[m].end_dir[i] - hi, lo - mid[m].end_dir[i]});
+    slack += mid[m].len_mm * (out + mid[m].sweep_rad);
+  }
+  return slack;
+}
+
+// The largest speed change d ≤ d0 per cycle that a chain from e to s passed at v leaves room
+// for (7.'s vertices with E, S and the slack; < 0: the turn alone is too much).
+double chain_d_max(const AxisVec& e, const AxisVec& s, const ChainMid* mid, std::size_t n, double v,
+                   double d0, const planner::Limits& lim) {
+  double d = d0;
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    if (!lim.axis_on[i] || lim.axis_amax_pc2[i] <= 0) continue;
+    const double ai = lim.axis_amax_pc2[i] - chain_slack(e, s, mid, n, i);
+    const double t = v * (s[i] - e[i]);
+    if (std::abs(t) > ai) return -1;
+    if (std::abs(s[i]) > 1e-12)
+      d = std::min(d, std::min(ai, ai + (s[i] > 0 ? t : -t)) / std::abs(s[i]));
+    if (std::abs(e[i]) > 1e-12)
+      d = std::min(d, std::min(ai, ai - (e[i] > 0 ? t : -t)) / std::abs(e[i]));
+  }
+  return d;
+}
+
+// The largest V at which a chain from e to s leaves room for a speed change d (linear in V:
+// |V·Δ_i − d·S_i|, |V·Δ_i + d·E_i| ≤ a_i − slack, Δ = S − E); 0 where even V = 0 does not.
+double chain_speed_pc(const AxisVec& e, const AxisVec& s, const ChainMid* mid, std::size_t n,
+                      double d, const planner::Limits& lim) {
+  double v = kInf;
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    if (!lim.axis_on[i] || lim.axis_amax_pc2[i] <= 0) continue;
+    const double ai = lim.axis_amax_pc2[i] - chain_slack(e, s, mid, n, i);
+    // (d ≤ a_i/|S_i| is what the segments' r gives, up to rounding: a relative margin.)
+    if (d * std::max(std::abs(s[i]), std::abs(e[i])) > ai * (1 + 1e-9)) return 0;
+    const double delta = s[i] - e[i];
+    if (std::abs(delta) <= 1e-12) continue;
+    const double sg = delta > 0 ? 1.0 : -1.0;
+    v = std::min({v, ai / std::abs(delta), (ai + d * s[i] * sg) / std::abs(delta),
+                  (ai - d * e[i] * sg) / std::abs(delta)});
+  }
+  return std::max(v, 0.0);
+}
+
+bool straight_joint(const AxisVec& u, const AxisVec& w) {
+  double q = 0;
+  for (std::size_t i = 0; i < kMaxAxes; ++i) q += (u[i] - w[i]) * (u[i] - w[i]);
+  return q <= 1e-18;
 }
 }  // namespace
 
@@ -542,6 +623,10 @@ void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const
   if (chained && a.length_mm < vg) {
     const double pair = planner::turn_speed_pc(prev_.end_dir, b.start_direction(), lim_);
     double both = pair < 0.999 * std::min(prev_.vg, vg) ? pair : kInf;
+    // The chain's turn beside the speed change its zone allows (joint_zones(), 7.).
+    if (zone_index_a_ == index_a && zone_chain_vg_ < 0.999 * prev_.vg) {
+      both = std::min(both, zone_chain_vg_);
+    }
     if (prev_.short_a) {
       const double triple = planner::turn_speed_pc(prev_.end_dir2, b.start_direction(), lim_);
       if (triple < 0.999 * std::min({prev_.vg2, prev_.vg, vg})) both = std::min(both, triple);
@@ -561,8 +646,17 @@ void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const
   }
   const AxisVec before = chained ? prev_.end_dir : a.end_direction();
   const double vg_before = chained ? prev_.vg : kInf;
-  prev_ = {true, index_a,   buf_.end_index() - 1, a.end_direction(), before,
-           vg,   vg_before, a.length_mm < vg};
+  prev_ = {true,
+           index_a,
+           buf_.end_index() - 1,
+           a.end_direction(),
+           before,
+           vg,
+           vg_before,
+           a.length_mm < vg,
+           a.start_direction(),
+           a.length_mm,
+           a.arc && a.rho_mm > 0 ? a.length_mm / a.rho_mm : 0.0};
   // A turn in the same cycle as a speed change: the joint zones (7.) keep both within every
   // axis limit (at a capped corner the cap is lowered until the zone's floor fits beside it).
   if (!(vg < 0.999 * around)) return;  // the segments' own caps already hold there
@@ -1000,6 +1094,32 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
       v0 = reach;
     }
   }
+  // At gentle corners the segments' caps (the machine's top speed) are far above a CAM
+  // program's feed, and the zone sized for them let the speed change by little more than the
+  // floor's share (bench/README (c)). Sized for F instead, with a joint cap of F so that it
+  // holds at any override: F the highest feed of the segments the pairs around the joint can
+  // start in, [j − (2 + lag)·V, j + V] (b at least V long, the walk back over at most
+  // kZoneWalk segments ahead of the tool's), so that at ≤ 100 % the cap costs nothing. Only
+  // where that leaves the speed change more room (below). Sizing for OR_max·F without a cap
+  // instead changed nothing on the built-in machine (200 % of F 6 000 is above its top speed).
+  const double v_feed = [&] {
+    double vf = std::max(a.feed_pc, b.feed_pc);
+    if (!(b.length_mm >= vf)) return kInf;
+    double from = a.s0_mm;
+    std::size_t walked = 0;
+    for (std::uint64_t k = index_a; from > a.end_mm() - (2 + lag_) * vf;) {
+      if (k <= std::max(cur_, buf_.begin_index())) return kInf;  // the tool's segment
+      const Segment& x = buf_[--k];
+      if (x.kind != ItemKind::kMotion) {
+        if (x.barrier) break;  // a stop: no step crosses it
+        continue;
+      }
+      if (++walked > kZoneWalk) return kInf;
+      vf = std::max(vf, x.feed_pc);
+      from = x.s0_mm;
+    }
+    return vf;
+  }();
   // Arcs next to the joint: a step of length u on an arc of curvature κ leaves its tangent's
   // line by R(1 − cos φ) ≤ u²κ/2 along the normal N (φ = uκ) and falls short along it by
   // u − R sin φ ≤ u³κ²/6; N turns by ≤ uκ over the step. Per axis ≤ (u²κ/2)(|N_i| + uκ·h_i)
@@ -1045,6 +1165,16 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     return d;
   };
   double d = d_max(v0);
+  // Only where the feed leaves the speed change more room than the passing speed does (at
+  // 100 % the cap then costs nothing; where the zone allows the segments' r anyway it would
+  // only add a cap that holds the corner at F above 100 %).
+  if (v_feed < v0) {
+    const double d_feed = d_max(v_feed);
+    if (d_feed > 1.001 * d) {
+      v0 = v_feed;
+      d = d_feed;
+    }
+  }
   double vj = v0;
   const double floor = kZoneFloor * r_ab * a0_;
   if (d < floor) {
@@ -1067,19 +1197,67 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
       vj = lo;
     }
   }
-  zone_vg_ = vj;
+  // Two or three corners within one step (a and the segment x before it shorter than the step,
+  // on_joint()): a pair of steps may turn from x's end (or the end of the one before x) to b at
+  // once while the speed changes. Its zone: d also meets 7.'s vertices for that turn at the
+  // chain's V (chain_d_max()), over [c − 2V, j + V] (c the chain's first corner, so the zone
+  // reaches back over the middle segments too). Where that leaves less than the floor, the
+  // chain is passed slower (chain_speed_pc(), the cap of both joints) or, below the middle's
+  // length, at most that (no step then skips a middle segment, and each corner's own zone
+  // holds). The turn alone at the chain's V used the whole axis budget before: 1 407 mm/s² on
+  // a 1 400 axis over a 1.3 µm line between two corners.
+  zone_chain_vg_ = kInf;
+  double chain_mm = 0;
+  double r_top = r_hi;
+  if (prev_.valid && prev_.index_b == index_a && a.length_mm < vj &&
+      !straight_joint(a.end_direction(), s)) {
+    const double xr = prev_.index_a >= buf_.begin_index() ? ratio_[buf_.slot(prev_.index_a)] : 1.0;
+    r_top = std::max(r_hi, xr);
+    ChainMid mids[2] = {{prev_.a_start_dir, prev_.end_dir, prev_.a_len_mm, prev_.a_sweep_rad},
+                        {a.start_direction(), a.end_direction(), a.length_mm,
+                         a.arc && a.rho_mm > 0 ? a.length_mm / a.rho_mm : 0.0}};
+    auto chain = [&](const AxisVec& from, const ChainMid* m, std::size_t n, double v_in) {
+      double mid_mm = 0;
+      for (std::size_t k = 0; k < n; ++k) mid_mm += m[k].len_mm;
+      const double vc = std::min(v_in, planner::turn_speed_pc(from, s, lim_));
+      if (!(vc > mid_mm)) return;  // steps ≤ the middle: each corner's own zone holds
+      chain_mm = std::max(chain_mm, mid_mm);
+      const double dc = chain_d_max(from, s, m, n, vc, r_top * a0_, lim_);
+      if (dc >= floor) {
+        d = std::min(d, dc);
+        return;
+      }
+      const double vf = chain_speed_pc(from, s, m, n, floor, lim_);
+      if (vf > mid_mm) {
+        zone_chain_vg_ = std::min(zone_chain_vg_, vf);
+        d = std::min(d, std::max(floor, chain_d_max(from, s, m, n, vf, r_top * a0_, lim_)));
+      } else {
+        zone_chain_vg_ = std::min(zone_chain_vg_, mid_mm);
+      }
+    };
+    if (!straight_joint(prev_.end_dir, a.start_direction())) {
+      chain(prev_.end_dir, &mids[1], 1, std::min(prev_.vg, vj));
+    }
+    if (prev_.short_a && !straight_joint(prev_.end_dir2, prev_.a_start_dir)) {
+      chain(prev_.end_dir2, mids, 2, std::min({prev_.vg2, prev_.vg, vj}));
+    }
+    vj = std::min(vj, zone_chain_vg_);
+  }
+  // The joint's cap: the passing speed, or lower where the floor or a chain needs it.
+  const double cap_v = std::min(vj, zone_chain_vg_);
+  zone_vg_ = cap_v;
   zone_joint_pc_ = corner;
   zone_index_a_ = index_a;
   const double rj = std::max(d / a0_, 1e-6);
   // Every step within V of the joint is ≤ V: the joint cap's Vg when there is one, else the
   // segments' caps.
-  const double v = vj < 0.999 * around ? vj : around;
-  const double zone_from = a.end_mm() - (2 + lag_) * v;
+  const double v = std::min(cap_v < 0.999 * around ? cap_v : around, v_feed);
+  const double zone_from = a.end_mm() - (2 + lag_) * v - chain_mm;
   if (late_check_ && !late_hold_) {
     // The block's range caps and the joint cap on_joint() will set (6.), with σ(c) no higher
     // than the zone below leaves it (r ≥ min(r_lo, r_j) over [zone start, c]).
     Cap joint_cap{0, 0, 0, 0, false, false};
-    const double vg = std::min({corner, around, vj});
+    const double vg = std::min({corner, around, cap_v});
     if (vg < 0.999 * around) {
       const double w = vg * (1 + lag_);
       joint_cap = {a.end_mm() - w, a.end_mm() + w, vg, 0, false, vg >= a0_};
@@ -1098,7 +1276,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
       if (std::sqrt(a0_ * a0_ / 4 + 2 * a0_ * d_sigma) - a0_ / 2 < step_) start_hold(a.end_mm());
     }
   }
-  if (rj >= r_hi) return;  // the segments' own r already fits
+  if (rj >= r_top) return;  // the segments' own r already fits
   // The zone [j − 2V, j] may reach back over several short segments (at most kZoneWalk): each
   // gets it as (part of) its tail zone. Never under or behind the tool (σ there is in use; a
   // late joint, see 6.).

@@ -154,6 +154,8 @@ class AccelLimitedAccDec final : public AccDec {
   // joint cap when lower than the segments' caps; see 7.).
   double zone_vg_ = 0;
   double zone_joint_pc_ = 0;  // planner::joint_speed_pc of that joint (on_joint reuses it)
+  // The cap of a chain of corners ending there (both joints), where its zone's floor needs one.
+  double zone_chain_vg_ = std::numeric_limits<double>::infinity();
   std::uint64_t zone_index_a_ = ~std::uint64_t{0};
   double sigma_total_ = 0;
 
@@ -188,6 +190,9 @@ class AccelLimitedAccDec final : public AccDec {
     double vg = 0;
     double vg2 = 0;
     bool short_a = false;
+    // The segment a (x for the joint after it): start direction, length, sweep (7.'s chains).
+    AxisVec a_start_dir;
+    double a_len_mm = 0, a_sweep_rad = 0;
   } prev_;
 
   // The last step left the line under the tool at its end j_mm (direction e there): 9.

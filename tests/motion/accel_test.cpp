@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iomanip>
 #include <numbers>
 #include <string>
 
@@ -185,6 +186,39 @@ TEST(AccelLimited, GentleCornerWithSpeedChangeKeepsAxisLimits) {
         }
       }
     }
+  }
+}
+
+// A curve of 0.5 mm lines turning 0.8° each (a CAM contour) on a diagonal, axis limits = Amax,
+// at F 3 000 with the override stepping up to 200 % and down while the tool is in the curve.
+// The joint zones there are sized for F (50 mm/s) instead of the machine's 333 mm/s, with a
+// joint cap of F that holds above 100 % (accel_limited.cpp 7.): every axis stays within its
+// limit at every override. Without that cap (zones sized for F, corners passed at 200 % of it)
+// Y measured 2 152 mm/s² on a 2 000 axis.
+TEST(AccelLimited, GentleCornersAtTheFeedKeepAxisLimitsAtEveryOverride) {
+  MachineConfig m = test_machine();
+  for (std::size_t i = 0; i < 3; ++i) m.axes[i].max_accel_mm_s2 = m.max_accel_mm_s2;
+  for (const double turn_deg : {0.8, -0.8, 2.0}) {
+    SCOPED_TRACE(::testing::Message() << turn_deg << " deg per corner");
+    Prog p;
+    Vec3 at{0, 0, 0};
+    double ang = kPi / 4;
+    for (int i = 0; i < 400; ++i) {
+      at = at + Vec3{0.5 * std::cos(ang), 0.5 * std::sin(ang), 0};
+      p.line_to(at, 3000);
+      ang += turn_deg * kPi / 180;
+    }
+    RunOpts o = accel_opts();
+    o.override_steps = {{0.3, 200.0}, {0.9, 50.0}, {1.3, 200.0}, {1.9, 120.0}, {2.6, 200.0}};
+    const RunResult r = run(m, p.blocks, o);
+    auto lim = testing::limits_from_config(m);
+    const auto rep = testing::check_trajectory(r.traj, p.blocks, lim);
+    EXPECT_TRUE(rep.ok()) << rep.summary();
+    EXPECT_EQ(r.mismatches, 0u);
+    for (std::size_t i = 0; i < 3; ++i) {
+      EXPECT_LE(rep.max_axis_accel_mm_s2[i], m.axes[i].max_accel_mm_s2 * 1.005) << "axis " << i;
+    }
+    expect_ends(r, {}, p.pos);
   }
 }
 
@@ -442,6 +476,43 @@ TEST(AccelLimited, SpeedRisesRightAfterTheCycleThatCrossesACappedCorner) {
   EXPECT_GE(risen, 15) << "of " << corners;
 }
 
+// Two corners within one cycle's travel (a segment shorter than the step between them): the
+// cycle that turns both at once also changes speed, so the zone of the chain must leave each
+// axis room for both (accel_limited.cpp 7., chains). With the combined turn alone using the
+// whole X budget (its corner speed 7.31 mm/s = 1 400 mm/s² · 1 ms / |S_x − E_x|, 0.1915), the
+// crossing pair also sped up by 0.49 mm/s (489 mm/s²) and X measured 1 407 mm/s² (seed 2 of
+// RandomProgramsWithCoupledAxesAndLines, a 1.34 µm line), and Y 603 mm/s² on a 600 axis (seed
+// 7: a 0.82 µm line at F 500 after an exact-path corner, override 150 %). Measured by the
+// checker from the samples.
+TEST(AccelLimited, TwoCornersWithinOneCycleShareTheAxisBudgetWithTheSpeedChange) {
+  {
+    MachineConfig m = test_machine();
+    m.axes[kX].max_accel_mm_s2 = 1400;
+    m.axes[kY].max_accel_mm_s2 = 1400;
+    m.axes[kZ].max_accel_mm_s2 = 2600;
+    m.lookahead_blocks = 4;
+    Prog p;
+    p.line_to(Vec3{-0.02915, -0.04645, -0.015}, 3000);
+    p.line_to(Vec3{-0.029991, -0.04745, -0.0153}, 3000);  // 1.34 µm
+    p.line_to(Vec3{-5.01499, -4.92245, -1.2403}, 8000);
+    run_checked(m, p);
+  }
+  {
+    MachineConfig m = test_machine();
+    m.axes[kX].max_accel_mm_s2 = 1400;
+    m.axes[kY].max_accel_mm_s2 = 600;
+    m.axes[kZ].max_accel_mm_s2 = 2600;
+    m.lookahead_blocks = 4;
+    Prog p;
+    p.line_to(Vec3{-30, -30, -9}, 10000, PathMode::kExactPath);
+    p.line_to(Vec3{-30.00053, -30.000576, -9.000259}, 500);  // 0.82 µm
+    p.line_to(Vec3{-33.77053, -33.790576, -10.025259}, 8000);
+    RunOpts o = accel_opts();
+    o.override_steps = {{0.377, 150.0}};
+    run_checked(m, p, o);
+  }
+}
+
 // A random program of lines, rapids, arcs and helices with random override steps on machine m
 // (random buffer size, sometimes late blocks): P1–P5 by the checker, the bound equal to the walk,
 // the end point reached at rest.
@@ -503,12 +574,12 @@ void random_program_with_override_steps(MachineConfig m, double override_ramp_s 
     RC_LOG() << rep.summary() << " feed_every " << o.feed_every << " buffer " << m.lookahead_blocks
              << "\n";
     for (const Block& b : p.blocks) {
-      RC_LOG() << "kind " << static_cast<int>(b.kind) << " line " << b.line << " (" << b.start[0]
-               << "," << b.start[1] << "," << b.start[2] << ") -> (" << b.end[0] << "," << b.end[1]
-               << "," << b.end[2] << ") c (" << b.center.x << "," << b.center.y << "," << b.center.z
-               << ") n (" << b.normal.x << "," << b.normal.y << "," << b.normal.z << ") turns "
-               << b.turns << " F " << b.feed_mm_min << " mode " << static_cast<int>(b.path_mode)
-               << "\n";
+      RC_LOG() << std::setprecision(17) << "kind " << static_cast<int>(b.kind) << " line " << b.line
+               << " (" << b.start[0] << "," << b.start[1] << "," << b.start[2] << ") -> ("
+               << b.end[0] << "," << b.end[1] << "," << b.end[2] << ") c (" << b.center.x << ","
+               << b.center.y << "," << b.center.z << ") n (" << b.normal.x << "," << b.normal.y
+               << "," << b.normal.z << ") turns " << b.turns << " F " << b.feed_mm_min << " mode "
+               << static_cast<int>(b.path_mode) << "\n";
     }
     for (const auto& [t, pct] : o.override_steps)
       RC_LOG() << "override " << t << " " << pct << "\n";
@@ -558,11 +629,10 @@ TEST(AccelLimited, ArcBrakesWithWhatTheSpeedLeaves) {
 // The same with axis limits near Amax (2 000 mm/s²), where an arc's normal and tangential
 // acceleration share the axes of its plane (accel_limited.cpp 2., 5., 9.: the arc's top speed,
 // its rise and its braking with what the speed leaves); test_machine()'s 10 000 mm/s² axes never
-// couple. Arcs and helices only: with lines too it still fails (seed 2: 1 407 mm/s² on a 1 400
-// axis at a 1.4 µm line between two corners; seed 7: 603 on 600 at a 0.8 µm one — the chained
-// corners of on_joint()). Before the stop's bounds took the lowest r up to the stop (4.), this
-// failed at 16 of 36 seeds × 300 cases (seed 13: 3 698 mm/s² on a 2 000 axis); 60 × 300 pass.
-RC_GTEST_PROP(AccelLimited, RandomProgramsWithCoupledArcAxes, ()) {
+// couple. Arcs and helices only here; with lines, rapids and path modes too below. Before the
+// stop's bounds took the lowest r up to the stop (4.), this failed at 16 of 36 seeds × 300 cases
+// (seed 13: 3 698 mm/s² on a 2 000 axis); 60 × 300 pass.
+void random_program_with_coupled_axes(bool arcs_only) {
   MachineConfig m = test_machine();
   for (std::size_t i = 0; i < 3; ++i) {
     m.axes[i].max_accel_mm_s2 = *rc::gen::element(600.0, 1400.0, 2000.0, 2000.0, 2600.0);
@@ -570,7 +640,21 @@ RC_GTEST_PROP(AccelLimited, RandomProgramsWithCoupledArcAxes, ()) {
   // After an override decrease the speed falls at the segment's rate, down to 600 mm/s² on a
   // line along the slowest axis and √(1 − 0.95²) = 0.31 of it on an arc at its top speed (2.):
   // the checker's default ramp assumes Amax. The fastest limit is 20 000 mm/min × 150 %.
-  random_program_with_override_steps(m, 20000 * 1.5 / 60 / (0.31 * 600) + 0.002, true);
+  random_program_with_override_steps(m, 20000 * 1.5 / 60 / (0.31 * 600) + 0.002, arcs_only);
+}
+
+RC_GTEST_PROP(AccelLimited, RandomProgramsWithCoupledArcAxes, ()) {
+  random_program_with_coupled_axes(true);
+}
+
+// The same with lines, rapids and the three path modes as well. Before the zone of a chain of
+// corners left the speed change its share of the combined turn (TwoCornersWithinOneCycle...
+// above) it failed at seeds 1, 2, 7 and 13 of 60 × 300 cases. Still failing: seed 57 (1 of the
+// 60 × 300), Y 2 018.7 mm/s² on a 2 000 axis at a capped corner 0.05 mm before an exact stop —
+// the stop's bounds in real distance brake at the segment's plain r inside the corner's zone
+// (step(), a_stop), not a chain.
+RC_GTEST_PROP(AccelLimited, RandomProgramsWithCoupledAxesAndLines, ()) {
+  random_program_with_coupled_axes(false);
 }
 
 }  // namespace
