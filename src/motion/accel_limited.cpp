@@ -1749,13 +1749,30 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   };
   double a_stop = a_seg;
   bool stop_far = false;
-  if (to_stop > 0) {
+  if (to_stop > 0 && !buf_.empty()) {
+    // The zones' r (7.) instead of the plain r for a stop that no block can add a zone before:
+    // one before the window's end or at a barrier there (an exact stop, a dwell, a waiting
+    // event). Decided once per stop position, when it first appears, and only if its bounds
+    // with the zones' r are far then: they then only rise as the tool moves on (with the plain
+    // r, a capped corner 0.05 mm before an exact stop braked across the corner by more than its
+    // zone allows: Y 2 018.7 on a 2 000 axis). A stop that stays where it was (a late barrier
+    // there, a hold) keeps the choice: switching would lower its bounds at once.
+    if (in.stop_mm != zones_stop_mm_) {
+      zones_stop_mm_ = in.stop_mm;
+      const Segment& last = buf_[buf_.end_index() - 1];
+      const bool hard =
+          in.stop_mm < last.end_mm() || (last.kind != ItemKind::kMotion && last.barrier);
+      stop_zones_ =
+          hard && lattice_far && to_stop >= 2 * vt && landing_far(std::min(a, r_zone_.min() * a0_));
+    }
+    const double a_here = stop_zones_ ? a : a_seg;
     // (Both bounds rise with a where to_stop ≥ 2·V_t: far with the window's lowest r is far.)
-    const double a_lo = std::min(a_seg, r_plain_.min() * a0_);
+    const double a_lo = std::min(a_here, (stop_zones_ ? r_zone_.min() : r_plain_.min()) * a0_);
     if (lattice_far && to_stop >= 2 * vt && landing_far(a_lo)) {
       stop_far = true;
     } else {
-      a_stop = std::min(a_seg, r_span(pos_mm_, std::nextafter(in.stop_mm, pos_mm_)).plain * a0_);
+      const Rates rs = r_span(pos_mm_, std::nextafter(in.stop_mm, pos_mm_));
+      a_stop = std::min(a_here, (stop_zones_ ? rs.zones : rs.plain) * a0_);
     }
   }
   if (!stop_far) stop_far = lattice_far && landing_far(a_stop);

@@ -252,8 +252,11 @@ class AccelLimitedAccDec final : public AccDec {
   // the segments it reaches back over (index_a and up to kZoneWalk before it).
   void check_late(double at_mm, double zone_mm, double zone_r, const Cap* joint_cap,
                   std::uint64_t index_a = 0);
-  bool rekeying_ = false;         // joint_zones() re-keys caps: insert() applies them at once
-  bool releasing_ = false;        // release_hold() inserts pending caps
+  bool rekeying_ = false;   // joint_zones() re-keys caps: insert() applies them at once
+  bool releasing_ = false;  // release_hold() inserts pending caps
+  // The stop whose braking takes the zones' r (step(), 3.) and that choice.
+  double zones_stop_mm_ = -1;
+  bool stop_zones_ = false;
   std::size_t pending_next_ = 0;  // the first pending cap not yet inserted
   void start_hold(double at_mm);
   void release_hold();
