@@ -146,12 +146,13 @@ void SummaryObserver::close_group() {
 inline void SummaryObserver::travel_check(const motion::Sample& s) {
   // Every axis at once, without a branch per axis: the limits of axes not checked (disabled,
   // or already warned) are ±∞, which no position leaves (a NaN leaves none either).
-  bool outside = false;
+  unsigned outside = 0;
   for (std::size_t i = 0; i < kMaxAxes; ++i) {
     const double p = s.position[i];
-    outside = outside | (p < travel_lo_mm_[i]) | (p > travel_hi_mm_[i]);
+    outside |=
+        static_cast<unsigned>(p < travel_lo_mm_[i]) | static_cast<unsigned>(p > travel_hi_mm_[i]);
   }
-  if (outside) travel_warn(s);
+  if (outside != 0) travel_warn(s);
 }
 
 // Out of line: the check above stays small enough to inline into on_sample.
