@@ -61,15 +61,14 @@ class FiniteDifferences {
     if (have_prev_) {
       const double dt = t_s - prev_t_;
       if (dt > 0) {
-        // Every axis slot without a branch per axis (the loops vectorise): a disabled axis
-        // gets d = 0, so its velocity and acceleration are 0; a non-linear one adds 0 to the
-        // squared length. The same doubles as skipping them (x + 0 = x, 0 / dt = 0).
+        // Enabled axes only: a division per axis is the cost here (disabled axes keep v = 0).
         AxisVec vel;
         double len2 = 0;
         for (std::size_t i = 0; i < kMaxAxes; ++i) {
-          const double d = enabled_[i] ? position[i] - prev_pos_[i] : 0.0;
+          if (!enabled_[i]) continue;
+          const double d = position[i] - prev_pos_[i];
           vel[i] = d / dt;
-          len2 += linear_[i] ? d * d : 0.0;
+          if (linear_[i]) len2 += d * d;
         }
         d_.moved = true;
         d_.dt_s = dt;
@@ -79,13 +78,14 @@ class FiniteDifferences {
           const double h = 0.5 * (dt + prev_dt_);
           double dv2 = 0;
           for (std::size_t i = 0; i < kMaxAxes; ++i) {
+            if (!enabled_[i]) continue;  // dv stays 0, acc 0
             const double dv = vel[i] - d_.vel[i];
             if constexpr (kAccel) {
               d_.acc[i] = dv / h;
             } else {
               d_.dv[i] = dv;
             }
-            dv2 += linear_[i] ? dv * dv : 0.0;
+            if (linear_[i]) dv2 += dv * dv;
           }
           d_.accel = true;
           d_.h_s = h;
