@@ -57,7 +57,10 @@ double segment_distance(Vec3 p, Vec3 a, Vec3 b) {
 }  // namespace
 
 SummaryObserver::SummaryObserver(const MachineConfig& machine, std::string mode)
-    : machine_(machine), diff_(machine) {
+    : machine_(machine),
+      // on_block keeps at most lookahead_blocks + 1024 after each push: the ring never grows.
+      pending_(static_cast<std::size_t>(machine.lookahead_blocks) + 1025),
+      diff_(machine) {
   summary_.mode = std::move(mode);
   // Window of on-path points searched for the contour error: the post-interpolation filter
   // delays the set-point by at most its length; keep at least 20 ms in case the kernel smooths

@@ -270,7 +270,7 @@ TEST(Summary, AccelerationMaximaAreBitIdenticalToDividingEveryCycle) {
 
 // The queue of pending blocks against std::deque through growth and wrap-around.
 TEST(GrowingFifo, BehavesLikeADeque) {
-  GrowingFifo<int> fifo;
+  GrowingFifo<int> fifo(5);  // grows from 5 (not a power of two)
   std::deque<int> ref;
   int next = 0;
   for (int round = 0; round < 2000; ++round) {
