@@ -59,7 +59,11 @@
 //    tail cap of 6. take a = A0 × the lowest plain r from the tool up to the stop: that minimum
 //    only rises as the tool moves on and both bounds rise with a, so following them never asks
 //    for more than a at once (with the r over the next step's reach only, a short low-r segment
-//    before the stop came into reach at once: 3 698 mm/s² on a 2 000 axis).
+//    before the stop came into reach at once: 3 698 mm/s² on a 2 000 axis). For a stop that no
+//    block can add a zone before (before the window's end, or at a barrier there), with the
+//    zones' r (7.) instead, chosen once per stop position when its bounds are far: the pair
+//    across a corner in its zone then changes speed by no more than the zone allows (a capped
+//    corner 0.05 mm before an exact stop: Y 2 018.7 on a 2 000 axis with the plain r).
 //
 //    Caps of V ≥ A0 (and corner caps ≥ A0/2 on long segments with r ≥ 1/2) use the lattice
 //    key instead, K = (V − A0/2)² + 2·A0·σ(c), x ≤ √(K − 2·A0·σ(s)) − A0/2: following it the steps
