@@ -186,6 +186,27 @@ void sweep_late(const Prog& p, std::size_t n, const std::string& what, bool slow
   }
 }
 
+// A shrunk case of the property below: its own arrival cycles (`ready`, one per block), checked
+// for every limit and the reference walk.
+testing::CheckReport check_arrivals(const MachineConfig& m, const std::vector<Block>& blocks,
+                                    const std::vector<std::uint64_t>& ready) {
+  const RunResult r = run_late(m, blocks, ready);
+  const auto rep = testing::check_trajectory(r.traj, blocks, testing::limits_from_config(m));
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+  EXPECT_EQ(r.mismatches, 0u);
+  return rep;
+}
+
+// Blocks [n, end) arriving at every cycle of the braking for the end of the first n.
+void sweep_braking(const MachineConfig& m, const std::vector<Block>& blocks, std::size_t n,
+                   const std::string& what) {
+  const Ramp ramp = braking_ramp(m, blocks, n);
+  ASSERT_GT(ramp.stop, ramp.brake) << what;
+  for (std::uint64_t at = ramp.brake; at <= ramp.stop; ++at) {
+    run_checked_late(m, blocks, n, at, what);
+  }
+}
+
 // A 30 mm line along a diagonal, then a line turned by `deg` (the late block).
 Prog corner(double deg, double feed_late = 10000, double len_late = 20) {
   Prog p;
@@ -329,17 +350,9 @@ TEST(AccelLate, LineAfterADwellArrivingLateWhileAHelixBrakesKeepsEveryLimit) {
   p.line_to(Vec3{-1.8886825384157793, 1.856444835357772, -0.57260276513891062}, 3000,
             PathMode::kExactStop);
   // The property's arrivals: the helix after 1.2 s at rest, then one block after another.
-  const std::vector<std::uint64_t> ready{0, 1200, 1220, 1221, 1281};
-  const RunResult r = run_late(m, p.blocks, ready);
-  const auto rep = testing::check_trajectory(r.traj, p.blocks, testing::limits_from_config(m));
-  EXPECT_TRUE(rep.ok()) << rep.summary();
-  EXPECT_EQ(r.mismatches, 0u);
+  check_arrivals(m, p.blocks, {0, 1200, 1220, 1221, 1281});
   // The line arriving at every cycle of the braking on the helix (the rest in time).
-  const Ramp ramp = braking_ramp(m, p.blocks, 4);
-  ASSERT_GT(ramp.stop, ramp.brake);
-  for (std::uint64_t at = ramp.brake; at <= ramp.stop; ++at) {
-    run_checked_late(m, p.blocks, 4, at, "line after a dwell, after a helix");
-  }
+  sweep_braking(m, p.blocks, 4, "line after a dwell, after a helix");
 }
 
 // Found by the property below (T2 = 4): a 30 mm line at F6000, braking for the end of a slow
@@ -358,17 +371,9 @@ TEST(AccelLate, FastHelixArrivingLateWhileALineBrakesKeepsTheLimit) {
   p.arc_to(Vec3{-0.0018174043898294312, 1, -30.727118919540519},
            Vec3{-0.0018174043898294312, 0, -30.827118919540521}, 15000, Vec3{0, -1, 0}, 1);
   p.blocks.back().path_mode = PathMode::kExactStop;
-  const std::vector<std::uint64_t> ready{0, 5, 25, 175, 325};
-  const RunResult r = run_late(m, p.blocks, ready);
-  const auto rep = testing::check_trajectory(r.traj, p.blocks, testing::limits_from_config(m));
-  EXPECT_TRUE(rep.ok()) << rep.summary();
-  EXPECT_EQ(r.mismatches, 0u);
+  check_arrivals(m, p.blocks, {0, 5, 25, 175, 325});
   // The fast helix arriving at every cycle of the braking (the rest in time).
-  const Ramp ramp = braking_ramp(m, p.blocks, 4);
-  ASSERT_GT(ramp.stop, ramp.brake);
-  for (std::uint64_t at = ramp.brake; at <= ramp.stop; ++at) {
-    run_checked_late(m, p.blocks, 4, at, "fast helix after a line");
-  }
+  sweep_braking(m, p.blocks, 4, "fast helix after a line");
 }
 
 // Found by the property below (T2 = 200, slow X/Y): a 1 µm G0 and a short one arriving while
@@ -386,11 +391,7 @@ TEST(AccelLate, MicronRapidArrivingLateWithALongJerkStageKeepsTheJerkLimit) {
   p.rapid_to(Vec3{-0.21321762361354468, 1.2821305704133306, -0.41576581813436142});
   p.rapid_to(Vec3{-0.21363780607435337, 1.2813164818093337, -0.41616670021736218});
   p.blocks.back().path_mode = PathMode::kExactStop;
-  const std::vector<std::uint64_t> ready{0, 5, 5, 405, 405};
-  const RunResult r = run_late(m, p.blocks, ready);
-  const auto rep = testing::check_trajectory(r.traj, p.blocks, testing::limits_from_config(m));
-  EXPECT_TRUE(rep.ok()) << rep.summary();
-  EXPECT_EQ(r.mismatches, 0u);
+  const auto rep = check_arrivals(m, p.blocks, {0, 5, 5, 405, 405});
   EXPECT_LE(rep.max_tangential_jerk_mm_s3, m.max_jerk_mm_s3 * 1.005);
   // The two G0s arriving at other cycles of the creep along the first G0.
   for (std::uint64_t at : {100, 200, 300, 400, 500, 600, 700, 800, 900}) {

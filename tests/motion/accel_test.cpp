@@ -476,17 +476,25 @@ TEST(AccelLimited, SpeedRisesRightAfterTheCycleThatCrossesACappedCorner) {
   EXPECT_GE(risen, 15) << "of " << corners;
 }
 
+// The machine of a shrunk case of the coupled-axes properties below: X, Y, Z limits (mm/s²)
+// and the look-ahead window they drew.
+MachineConfig coupled_machine(double x_mm_s2, double y_mm_s2, double z_mm_s2,
+                              std::uint32_t window) {
+  MachineConfig m = test_machine();
+  m.axes[kX].max_accel_mm_s2 = x_mm_s2;
+  m.axes[kY].max_accel_mm_s2 = y_mm_s2;
+  m.axes[kZ].max_accel_mm_s2 = z_mm_s2;
+  m.lookahead_blocks = window;
+  return m;
+}
+
 // A capped corner 0.05 mm before an exact stop (seed 57 of RandomProgramsWithCoupledAxesAndLines,
 // Y and Z at Amax, X faster): the tool brakes for the stop through the corner's zone, and the
 // stop's bounds in real distance took the segments' plain r, so the pair across the corner
 // slowed by 1.64 µm/cycle² where the zone allows 1.27: Y 2 018.7 on a 2 000 axis. A stop that
 // no block can add a zone before now brakes with the zones' r (accel_limited.cpp 3.).
 TEST(AccelLimited, CappedCornerJustBeforeAnExactStopKeepsTheAxisLimit) {
-  MachineConfig m = test_machine();
-  m.axes[kX].max_accel_mm_s2 = 2600;
-  m.axes[kY].max_accel_mm_s2 = 2000;
-  m.axes[kZ].max_accel_mm_s2 = 2000;
-  m.lookahead_blocks = 4;
+  const MachineConfig m = coupled_machine(2600, 2000, 2000, 4);
   Prog p;
   p.line_to(Vec3{-15.75, -24.18, -4.92}, 3000);
   p.line_to(Vec3{-18.62, -28.17, -5.7}, 3000, PathMode::kExactPath);
@@ -511,11 +519,7 @@ TEST(AccelLimited, CappedCornerJustBeforeAnExactStopKeepsTheAxisLimit) {
 // checker from the samples.
 TEST(AccelLimited, TwoCornersWithinOneCycleShareTheAxisBudgetWithTheSpeedChange) {
   {
-    MachineConfig m = test_machine();
-    m.axes[kX].max_accel_mm_s2 = 1400;
-    m.axes[kY].max_accel_mm_s2 = 1400;
-    m.axes[kZ].max_accel_mm_s2 = 2600;
-    m.lookahead_blocks = 4;
+    const MachineConfig m = coupled_machine(1400, 1400, 2600, 4);
     Prog p;
     p.line_to(Vec3{-0.02915, -0.04645, -0.015}, 3000);
     p.line_to(Vec3{-0.029991, -0.04745, -0.0153}, 3000);  // 1.34 µm
@@ -523,11 +527,7 @@ TEST(AccelLimited, TwoCornersWithinOneCycleShareTheAxisBudgetWithTheSpeedChange)
     run_checked(m, p);
   }
   {
-    MachineConfig m = test_machine();
-    m.axes[kX].max_accel_mm_s2 = 1400;
-    m.axes[kY].max_accel_mm_s2 = 600;
-    m.axes[kZ].max_accel_mm_s2 = 2600;
-    m.lookahead_blocks = 4;
+    const MachineConfig m = coupled_machine(1400, 600, 2600, 4);
     Prog p;
     p.line_to(Vec3{-30, -30, -9}, 10000, PathMode::kExactPath);
     p.line_to(Vec3{-30.00053, -30.000576, -9.000259}, 500);  // 0.82 µm
