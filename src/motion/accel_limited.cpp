@@ -56,14 +56,15 @@
 //    with r < 1 the decrement is ≤ r·A0 ((1/2 − r)² ≤ 1/4). The step that reaches the stop is
 //    clipped to land on it (≤ A0: P4's arrival at ≤ Amax·τ), so the last sample is the stop.
 //    Near the stop the landing step in real distance (x, x − a, …, landing exactly) and the
-//    tail cap of 6. take a = A0 × the lowest plain r from the tool up to the stop: that minimum
-//    only rises as the tool moves on and both bounds rise with a, so following them never asks
-//    for more than a at once (with the r over the next step's reach only, a short low-r segment
-//    before the stop came into reach at once: 3 698 mm/s² on a 2 000 axis). For a stop that no
-//    block can add a zone before (before the window's end, or at a barrier there), with the
-//    zones' r (7.) instead, chosen once per stop position when its bounds are far: the pair
-//    across a corner in its zone then changes speed by no more than the zone allows (a capped
-//    corner 0.05 mm before an exact stop: Y 2 018.7 on a 2 000 axis with the plain r).
+//    tail cap of 6. take a = A0 × the lowest r (with the joint zones, 7.) from the tool up to
+//    the stop: that minimum only rises as the tool moves on and both bounds rise with a, so
+//    following them never asks for more than a at once (with the r over the next step's reach
+//    only, a short low-r segment before the stop came into reach at once: 3 698 mm/s² on a
+//    2 000 axis; with the segments' r without the zones, the pair across a corner just before
+//    the stop slowed by more than its zone leaves beside the turn: Y 2 018.7 on a 2 000 axis
+//    0.05 mm before an exact stop, X 1 475.6 on a 1 400 axis 0.03 mm before the program's
+//    end). A block arriving while the tool brakes for the window's end, whose r or joint zone
+//    would lower these bounds at once below the last step, is held (6., check_stop()).
 //
 //    Caps of V ≥ A0 (and corner caps ≥ A0/2 on long segments with r ≥ 1/2) use the lattice
 //    key instead, K = (V − A0/2)² + 2·A0·σ(c), x ≤ √(K − 2·A0·σ(s)) − A0/2: following it the steps
@@ -114,10 +115,13 @@
 //    commanded position below the last step — from at or above it, following it needs ≤ r·A0
 //    per cycle, 3. (ii)), and so is the stop at the joint when the joint's zone (7.) lowers σ
 //    ahead of the tool (its lattice bound must still allow the last step; found: a zone ahead of
-//    a 1 µm segment gave 2 011.7 mm/s²); insert() tests what these did not foresee (on_joint()'s
-//    cap for two corners in one cycle). Only when the tool is near enough for anything to bind:
-//    every cap starts at or after s0 − (2 + lag)·v_hi, and from c − p ≥ (u²/(2·A0) + u + A0)/r_lo
-//    on no key bound is below the step u. If one binds, the block is *held*: the window's end it
+//    a 1 µm segment gave 2 011.7 mm/s²), and the stop's landing bounds in real distance (3.)
+//    at the block's end, with its r and its joint zone's (check_stop()); insert() tests what
+//    these did not foresee (on_joint()'s cap for two corners in one cycle). Only when the tool
+//    is near enough for anything to bind: every cap starts at or after s0 − (2 + lag)·v_hi, and
+//    from c − p ≥ (u²/(2·A0) + u + A0)/r_lo on no key bound is below the step u (r_lo the
+//    window's, the block's, and kZoneFloor × the lower r at its joint, the lowest its zone
+//    may have). If one binds, the block is *held*: the window's end it
 //    arrived at (hold_mm_) stays a stop, the caps of every block arriving meanwhile wait in
 //    pending_ (and no joint zone reaches behind hold_mm_), and once the tool has been at rest
 //    there for the post filter's length they are inserted with the σ(c) of then. The tool
@@ -409,7 +413,6 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       key_feed_(pool_, levels_),
       overflow_(3 * buffer.capacity()),
       r_zone_(buffer.capacity()),
-      r_plain_(buffer.capacity()),
       check_(check_reference_walk),
       jerk_(limits.t2_cycles > 1 ? limits.t2_cycles : 1),
       jerk_on_(limits.t2_cycles > 1),
@@ -509,9 +512,12 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
     // σ(c) − σ_p ≥ d = u²/(2·A0) + u + A0 and both key forms (3.) give a bound ≥ u there.
     const double v_hi =
         std::max({vcap, s.feed_pc * or_max_, have_prev_ ? vcap_[buf_.slot(prev_index_)] : 0.0});
-    // (With this block's own r: the stop's landing bounds below use it, far from d/r_lo on they
+    // (With this block's own r and the lowest its joint's zone may have, kZoneFloor of the
+    // lower r at the joint (7.): the stop's landing bounds use them, far from d/r_lo on they
     // are ≥ u as well, 3.)
-    const double r_lo = std::max(1e-6, std::min({1.0, r_zone_.min(), r}));
+    const double r_prev = have_prev_ ? ratio_[buf_.slot(prev_index_)] : 1.0;
+    const double r_lo =
+        std::max(1e-6, std::min({1.0, r_zone_.min(), r, kZoneFloor * std::min(r, r_prev)}));
     const double near_mm = (2 + lag_) * v_hi + (step_ * step_ / (2 * a0_) + step_ + a0_) / r_lo;
     if (pos_mm_ + near_mm >= s.s0_mm) {
       late_m_ = step_;
@@ -533,18 +539,11 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
       late_range_[n_late_range_++] = {c,      s.end_mm() + reach_k[k], v[k], 0,
                                       k == 1, k == 0 && vcap >= a0_};
     }
-    // The stop's landing step and tail cap (3.) use the lowest plain r from the tool up to the
-    // stop: with this block's end as the window's new stop, an r of its own below that lowers
-    // them at once (found: a 0.1 mm helix at r = 0.29 arriving while the tool braked on a line,
-    // T2 = 4: the commanded step fell by 2.02·A0 in one cycle, 2 126 mm/s² after the jerk stage).
-    if (step_ > 0 && r < 1) {
-      const double a_new = std::min(r, r_span(pos_mm_, s.s0_mm).plain) * a0_;
-      const double d = s.end_mm() - pos_mm_;
-      const double vt = tail_cap_pc_;
-      const double tail =
-          d <= vt ? vt : std::sqrt(a_new * a_new + vt * vt + 2 * a_new * (d - vt)) - a_new;
-      if (std::min(landing_step(d, a_new), tail) < step_) start_hold(s.s0_mm);
-    }
+    // With this block's end as the window's new stop, an r of its own lowers the stop's
+    // bounds (found: a 0.1 mm helix at r = 0.29 arriving while the tool braked on a line,
+    // T2 = 4: the commanded step fell by 2.02·A0 in one cycle, 2 126 mm/s² after the jerk
+    // stage); its joint's zone is tested in joint_zones().
+    if (r < 1) check_stop(s.end_mm(), s.s0_mm, r);
     // At a joint, joint_zones() tests them with the σ its zone will leave.
     if (!joint && !late_hold_) check_late(s.s0_mm, 0, 1, nullptr);
   }
@@ -679,12 +678,9 @@ void AccelLimitedAccDec::on_retire(std::uint64_t index) {
   clear(s + 1);
   clear(s + 2);
   // The slot may next hold an event (no on_segment): no r there. Every leaf ≥ 1 means "no
-  // limit" to r_span() (rates are ≤ 1), so a leaf of 1 (r_plain_ ≥ r_zone_) is left as it is: the
-  // usual retirement writes nothing to the trees.
-  if (r_zone_.at(slot) < 1) {
-    r_zone_.set(slot, MinTree::kEmpty);
-    r_plain_.set(slot, MinTree::kEmpty);
-  }
+  // limit" to r_span() (rates are ≤ 1), so a leaf of 1 is left as it is: the usual retirement
+  // writes nothing to the tree.
+  if (r_zone_.at(slot) < 1) r_zone_.set(slot, MinTree::kEmpty);
 }
 
 bool AccelLimitedAccDec::detach(std::uint64_t index) {
@@ -814,7 +810,6 @@ void AccelLimitedAccDec::update_r(std::uint64_t index) {
   const std::size_t slot = buf_.slot(index);
   if (s.kind != ItemKind::kMotion) {
     r_zone_.set(slot, MinTree::kEmpty);
-    r_plain_.set(slot, MinTree::kEmpty);
     return;
   }
   // r_span()'s rate of a segment inside [from, to] as a whole (from ≤ s0, end ≤ to), written
@@ -824,7 +819,6 @@ void AccelLimitedAccDec::update_r(std::uint64_t index) {
   if (s.end_mm() - s.s0_mm > s.length_mm - tail_mm_[slot]) rate = std::min(rate, tail_r_[slot]);
   // (A slot usually holds 1 already: on_retire() leaves leaves of 1.)
   if (r_zone_.at(slot) != rate) r_zone_.set(slot, rate);
-  if (r_plain_.at(slot) != ratio_[slot]) r_plain_.set(slot, ratio_[slot]);
 }
 
 void AccelLimitedAccDec::add_head(std::size_t slot, double mm, double r) {
@@ -919,6 +913,19 @@ void AccelLimitedAccDec::check_late(double at_mm, double zone_mm, double zone_r,
   }
 }
 
+void AccelLimitedAccDec::check_stop(double stop_mm, double at_mm, double r_new) {
+  // The stop's landing step and tail cap (3.) use the lowest r (with the zones) from the tool
+  // up to the stop: with stop_mm as the window's new stop and r_new as low as a new block
+  // brings into that span, they must still allow the last step.
+  if (step_ <= 0 || late_hold_) return;
+  const double a_new = std::min(r_new, r_span(pos_mm_, at_mm)) * a0_;
+  const double d = stop_mm - pos_mm_;
+  const double vt = tail_cap_pc_;
+  const double tail =
+      d <= vt ? vt : std::sqrt(a_new * a_new + vt * vt + 2 * a_new * (d - vt)) - a_new;
+  if (std::min(landing_step(d, a_new), tail) < step_) start_hold(at_mm);
+}
+
 void AccelLimitedAccDec::start_hold(double at_mm) {
   late_hold_ = true;
   hold_mm_ = at_mm;
@@ -1007,9 +1014,8 @@ double AccelLimitedAccDec::seg_sigma(std::size_t slot, double x_mm) const {
   return out;
 }
 
-AccelLimitedAccDec::Rates AccelLimitedAccDec::r_span(double from_mm, double to_mm) const {
-  // Both minima in one walk (with the joint zones and without: the same items).
-  Rates out;
+double AccelLimitedAccDec::r_span(double from_mm, double to_mm) const {
+  double out = 1;
   if (buf_.empty()) return out;
   const std::uint64_t first = std::max(cur_, buf_.begin_index()), end = buf_.end_index();
   if (first >= end) return out;
@@ -1021,21 +1027,19 @@ AccelLimitedAccDec::Rates AccelLimitedAccDec::r_span(double from_mm, double to_m
     if (s.end_mm() < from_mm) return true;
     const std::size_t slot = buf_.slot(k);
     double rate = ratio_[slot];
-    out.plain = std::min(out.plain, rate);
     if (std::max(from_mm, s.s0_mm) - s.s0_mm < head_mm_[slot]) {
       rate = std::min(rate, head_r_[slot]);
     }
     if (std::min(to_mm, s.end_mm()) - s.s0_mm > s.length_mm - tail_mm_[slot]) {
       rate = std::min(rate, tail_r_[slot]);
     }
-    out.zones = std::min(out.zones, rate);
+    out = std::min(out, rate);
     return true;
   };
   // An item's rate over any part of it lies between its rate as a whole (its leaf of r_zone_,
-  // kept current by update_r(); events and retired slots: ≥ 1) and 1, and its plain r
-  // (r_plain_) ≥ that leaf. So where no leaf of the items the walk may visit is below 1, both
-  // minima are exactly 1 (the usual case between joint zones): read from the compact leaves,
-  // not from the items.
+  // kept current by update_r(); events and retired slots: ≥ 1) and 1. So where no leaf of the
+  // items the walk may visit is below 1, the minimum is exactly 1 (the usual case between
+  // joint zones): read from the compact leaves, not from the items.
   const std::size_t cap = buf_.capacity();
   auto range_min = [&](const MinTree& t, std::size_t a, std::size_t n) {
     return a + n <= cap ? t.min_range(a, a + n)
@@ -1064,10 +1068,7 @@ AccelLimitedAccDec::Rates AccelLimitedAccDec::r_span(double from_mm, double to_m
   // before to_mm (seek() skipped it), so its rate is that of the whole item: a range minimum.
   if (!item(first)) return out;
   const std::size_t a = buf_.slot(first + 1), n = static_cast<std::size_t>(last - first - 1);
-  const double zones = range_min(r_zone_, a, n);
-  out.zones = std::min(out.zones, zones);
-  // r_plain_ ≥ r_zone_ leaf by leaf: its range minimum only matters below out.plain.
-  if (zones < out.plain) out.plain = std::min(out.plain, range_min(r_plain_, a, n));
+  out = std::min(out, range_min(r_zone_, a, n));
   item(last);
   return out;
 }
@@ -1278,6 +1279,8 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
           sigma_at(a.end_mm()), sigma_at(zs) + std::min(rj, r_zone_.min()) * (a.end_mm() - zs));
       const double d_sigma = std::max(0.0, sigma_j - late_sigma_p_);
       if (std::sqrt(a0_ * a0_ / 4 + 2 * a0_ * d_sigma) - a0_ / 2 < step_) start_hold(a.end_mm());
+      // And the landing bounds in real distance, which take the zones' r (3.).
+      check_stop(b.end_mm(), a.end_mm(), std::min(rj, ratio_[slot_b]));
     }
   }
   if (rj >= r_top) return;  // the segments' own r already fits
@@ -1593,7 +1596,7 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   const double after = lag_ == 0 && step_ > 0 ? after_corner() : kInf;
 
   double sigma_p = sigma_total_;
-  double r = 1, r_seg = 1;
+  double r = 1;
   // The tool's arc whose deceleration may follow its speed (5.); none: capacity.
   std::size_t recover_arc = buf_.capacity();
   // The tool's arc whose braking bounds may follow its speed (10.); none: capacity.
@@ -1611,26 +1614,23 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     if (in.stop_mm > pos_mm_ && in.stop_mm <= reach) {
       reach = std::min(reach, std::nextafter(in.stop_mm, pos_mm_));
     }
-    const Rates rates = r_span(pos_mm_, reach);
-    r = rates.zones;
-    r_seg = rates.plain;
+    const double r_reach = r_span(pos_mm_, reach);
+    r = r_reach;
     // Past the corner just crossed, its head zone (7.) is replaced by the exact limit: within
     // b before its tail zone, b's own r.
-    if (after < kInf && reach < s.end_mm() - tail_mm_[slot]) r = r_seg = ratio_[slot];
+    if (after < kInf && reach < s.end_mm() - tail_mm_[slot]) r = ratio_[slot];
     // Both steps of the pair inside the arc: the step before started in it too (a pair across
     // the joint before the arc is the joint zone's, 7., which counts on r).
     if (lag_ == 0 && arc_g_[slot] > 0 && reach < s.end_mm() && pos_mm_ - step_ >= s.s0_mm &&
-        rates.zones == ratio_[slot]) {
+        r_reach == ratio_[slot]) {
       recover_arc = slot;
     }
     // The pair of this step and the one before is inside the arc, or this step lands past the
     // point e where 9. hands over to the keys (then ≤ W, a step the keys allow).
     if (lag_ == 0 && arc_g_[slot] > 0 && pos_mm_ - step_ > s.s0_mm) brake_arc = slot;
   }
-  // a: the speed change allowed in this cycle; a_seg, without the joint zones: the stop's
-  // lattice in real distance near the stop (the zones are in σ, which the stop bound uses).
+  // a: the speed change allowed in this cycle.
   const double a = r * a0_;
-  const double a_seg = r_seg * a0_;
 
   // The cycle's step is a plain minimum, u = min(the change, the feed limit, the geometric caps,
   // the braking bounds, the stop bounds, to_stop), and a minimum does not change when a term
@@ -1751,32 +1751,16 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     return 2 * ac * to_stop >= above(u + ac / 2) &&
            (to_stop <= vt ? vt >= u : ac * ac + vt * vt + 2 * ac * (to_stop - vt) >= above(u + ac));
   };
-  double a_stop = a_seg;
+  double a_stop = a;
   bool stop_far = false;
   if (to_stop > 0 && !buf_.empty()) {
-    // The zones' r (7.) instead of the plain r for a stop that no block can add a zone before:
-    // one before the window's end or at a barrier there (an exact stop, a dwell, a waiting
-    // event). Decided once per stop position, when it first appears, and only if its bounds
-    // with the zones' r are far then: they then only rise as the tool moves on (with the plain
-    // r, a capped corner 0.05 mm before an exact stop braked across the corner by more than its
-    // zone allows: Y 2 018.7 on a 2 000 axis). A stop that stays where it was (a late barrier
-    // there, a hold) keeps the choice: switching would lower its bounds at once.
-    if (in.stop_mm != zones_stop_mm_) {
-      zones_stop_mm_ = in.stop_mm;
-      const Segment& last = buf_[buf_.end_index() - 1];
-      const bool hard =
-          in.stop_mm < last.end_mm() || (last.kind != ItemKind::kMotion && last.barrier);
-      stop_zones_ =
-          hard && lattice_far && to_stop >= 2 * vt && landing_far(std::min(a, r_zone_.min() * a0_));
-    }
-    const double a_here = stop_zones_ ? a : a_seg;
-    // (Both bounds rise with a where to_stop ≥ 2·V_t: far with the window's lowest r is far.)
-    const double a_lo = std::min(a_here, (stop_zones_ ? r_zone_.min() : r_plain_.min()) * a0_);
+    // With the zones' r (3.; a block whose r or zone would lower these bounds at once is held,
+    // 6.). (Both bounds rise with a where to_stop ≥ 2·V_t: far with the window's lowest r is far.)
+    const double a_lo = std::min(a, r_zone_.min() * a0_);
     if (lattice_far && to_stop >= 2 * vt && landing_far(a_lo)) {
       stop_far = true;
     } else {
-      const Rates rs = r_span(pos_mm_, std::nextafter(in.stop_mm, pos_mm_));
-      a_stop = std::min(a_here, (stop_zones_ ? rs.zones : rs.plain) * a0_);
+      a_stop = std::min(a, r_span(pos_mm_, std::nextafter(in.stop_mm, pos_mm_)) * a0_);
     }
   }
   if (!stop_far) stop_far = lattice_far && landing_far(a_stop);

@@ -86,17 +86,14 @@ class AccelLimitedAccDec final : public AccDec {
     return owner_[pos] == kNone ? State::kEmpty : state_[owner_[pos]];
   }
   // The lowest r of the buffer item `index` as a whole (segments strictly inside a span of
-  // r_span), with and without its joint zones: leaves of r_zone_ / r_plain_ (events: empty).
+  // r_span), with its joint zones: leaves of r_zone_ (events: empty).
   void update_r(std::uint64_t index);
   double sigma_at(double pos_mm) const;  // σ of a path position inside the buffer
   // ∫ r over the first x mm of the segment in `slot` (head and tail zones included).
   double seg_sigma(std::size_t slot, double x_mm) const;
   // The lowest r over path positions [from, to] (the current segment and the following ones),
-  // with or without the joint zones.
-  struct Rates {
-    double zones = 1, plain = 1;
-  };
-  Rates r_span(double from_mm, double to_mm) const;
+  // with the joint zones.
+  double r_span(double from_mm, double to_mm) const;
   // A joint a → b without a stop between: the acceleration zones on both sides (see 7.).
   void joint_zones(std::uint64_t index_a, std::size_t slot_b, const planner::Segment& b);
   void advance_current();
@@ -174,7 +171,7 @@ class AccelLimitedAccDec final : public AccDec {
   planner::MinTreeRows key_feed_;
   // Positions 3·capacity + k (k = 0, 1, 2): active caps of retired segments, merged (detach()).
   std::size_t overflow_;
-  planner::MinTree r_zone_, r_plain_;  // by buffer slot, see update_r()
+  planner::MinTree r_zone_;  // by buffer slot, see update_r()
 
   // Range caps of the previous segment (to extend them instead of adding a cap per segment).
   bool have_prev_ = false;
@@ -252,12 +249,12 @@ class AccelLimitedAccDec final : public AccDec {
   // the segments it reaches back over (index_a and up to kZoneWalk before it).
   void check_late(double at_mm, double zone_mm, double zone_r, const Cap* joint_cap,
                   std::uint64_t index_a = 0);
-  bool rekeying_ = false;   // joint_zones() re-keys caps: insert() applies them at once
-  bool releasing_ = false;  // release_hold() inserts pending caps
-  // The stop whose braking takes the zones' r (step(), 3.) and that choice.
-  double zones_stop_mm_ = -1;
-  bool stop_zones_ = false;
+  bool rekeying_ = false;         // joint_zones() re-keys caps: insert() applies them at once
+  bool releasing_ = false;        // release_hold() inserts pending caps
   std::size_t pending_next_ = 0;  // the first pending cap not yet inserted
+  // Holds a late block when the stop's landing bounds at stop_mm, with r_new over the block
+  // (from at_mm), would fall below the last step (6.).
+  void check_stop(double stop_mm, double at_mm, double r_new);
   void start_hold(double at_mm);
   void release_hold();
 };

@@ -491,8 +491,8 @@ MachineConfig coupled_machine(double x_mm_s2, double y_mm_s2, double z_mm_s2,
 // A capped corner 0.05 mm before an exact stop (seed 57 of RandomProgramsWithCoupledAxesAndLines,
 // Y and Z at Amax, X faster): the tool brakes for the stop through the corner's zone, and the
 // stop's bounds in real distance took the segments' plain r, so the pair across the corner
-// slowed by 1.64 µm/cycle² where the zone allows 1.27: Y 2 018.7 on a 2 000 axis. A stop that
-// no block can add a zone before now brakes with the zones' r (accel_limited.cpp 3.).
+// slowed by 1.64 µm/cycle² where the zone allows 1.27: Y 2 018.7 on a 2 000 axis. Stops now
+// brake with the zones' r (accel_limited.cpp 3.).
 TEST(AccelLimited, CappedCornerJustBeforeAnExactStopKeepsTheAxisLimit) {
   const MachineConfig m = coupled_machine(2600, 2000, 2000, 4);
   Prog p;
@@ -506,6 +506,46 @@ TEST(AccelLimited, CappedCornerJustBeforeAnExactStopKeepsTheAxisLimit) {
     const auto rep = testing::check_trajectory(r.traj, p.blocks, testing::limits_from_config(m));
     EXPECT_TRUE(rep.ok()) << "feed_every " << feed_every << ": " << rep.summary();
     EXPECT_LE(rep.max_axis_accel_mm_s2[kY], 2000 * 1.005) << feed_every;
+  }
+}
+
+// The same before the program's end, the window's last stop (seeds 74 and 78 of
+// RandomProgramsWithCoupledAxesAndLines): the stop's landing step in real distance took the plain
+// r, so the pair across a gentle corner 0.03 mm before the end slowed by 1.40 µm/cycle² where the
+// zone leaves 1.18 (X 1 475.6 on a 1 400 axis), and a 0.02 mm line after a long one at 150 %
+// override gave X 2 033.7 on a 2 000 axis. Every stop now brakes with the zones' r, and a block
+// whose zone would lower those bounds at once is held (accel_limited.cpp 3., 6.).
+TEST(AccelLimited, CappedCornerJustBeforeTheProgramEndKeepsTheAxisLimit) {
+  struct Case {
+    MachineConfig m;
+    Prog p;
+    std::vector<std::pair<double, double>> override_steps;
+  };
+  std::vector<Case> cases;
+  {
+    Case c{coupled_machine(1400, 2600, 2600, 4), {}, {}};
+    c.p.line_to(Vec3{-5, -5, -1.5}, 3000, PathMode::kExactStop);
+    c.p.line_to(Vec3{-5.4425, -5.262, -1.586}, 8000, PathMode::kExactPath);  // 0.52 mm
+    c.p.line_to(Vec3{-5.4684, -5.27735, -1.59725}, 3000);                    // 0.03 mm
+    cases.push_back(c);
+  }
+  {
+    Case c{coupled_machine(2000, 2000, 1400, 4), {}, {{0.0, 150.0}, {2.5, 100.0}}};
+    c.p.line_to(Vec3{-27.99, -12.18, -8.94}, 3000);
+    c.p.line_to(Vec3{-28.0046, -12.1906, -8.94795}, 10000);  // 0.02 mm
+    cases.push_back(c);
+  }
+  for (std::size_t k = 0; k < cases.size(); ++k) {
+    const Case& c = cases[k];
+    for (const std::size_t feed_every : {0, 1}) {
+      RunOpts o = accel_opts();
+      o.feed_every = feed_every;
+      o.override_steps = c.override_steps;
+      const RunResult r = run_checked(c.m, c.p, o);
+      const auto rep = check(c.m, c.p.blocks, r);
+      EXPECT_LE(rep.max_axis_accel_mm_s2[kX], c.m.axes[kX].max_accel_mm_s2 * 1.005)
+          << "case " << k << ", feed_every " << feed_every;
+    }
   }
 }
 
@@ -675,14 +715,9 @@ RC_GTEST_PROP(AccelLimited, RandomProgramsWithCoupledArcAxes, ()) {
 
 // The same with lines, rapids and the three path modes as well. Before the zone of a chain of
 // corners left the speed change its share of the combined turn (TwoCornersWithinOneCycle...
-// above) it failed at seeds 1, 2, 7 and 13 of 60 × 300 cases, and at seed 57 until a stop that
-// no block can add a zone before braked with the zones' r
-// (CappedCornerJustBeforeAnExactStopKeepsTheAxisLimit). Disabled in the default run: seeds
-// 61–120 × 300 still fail at 74 (X 1 475.6 on a 1 400 axis: a 3 000 mm/min exact stop, then an
-// F8000 G61 line of 0.52 mm and a 0.03 mm line) and 78 (X 2 033.7 on a 2 000 axis: a 0.02 mm
-// F10000 line after a long one, override 150 %), open work on issue 9; a random seed each run
-// would fail CI about 1 run in 50. Run it with --gtest_also_run_disabled_tests and RC_PARAMS.
-RC_GTEST_PROP(AccelLimited, DISABLED_RandomProgramsWithCoupledAxesAndLines, ()) {
+// above) it failed at seeds 1, 2, 7 and 13 of 60 × 300 cases, and at seeds 57, 74 and 78 until
+// every stop braked with the zones' r (CappedCornerJustBefore...); 120 × 300 pass.
+RC_GTEST_PROP(AccelLimited, RandomProgramsWithCoupledAxesAndLines, ()) {
   random_program_with_coupled_axes(false);
 }
 
