@@ -239,7 +239,8 @@ std::string cutting_config_to_toml(const CuttingConfig& c) {
   };
   auto num = [](double v) { return fmt::format("{}", v); };
   auto triple = [&num](const std::array<double, 3>& v) {
-    return "[" + num(v[0]) + ", " + num(v[1]) + ", " + num(v[2]) + "]";
+    // (fmt, not "[" + std::string: GCC 12 -O3 warns a false -Wrestrict on that operator+.)
+    return fmt::format("[{}, {}, {}]", num(v[0]), num(v[1]), num(v[2]));
   };
   const bool any = c.stock.enabled || !c.tools.empty() || c != CuttingConfig{};
   if (!any) {
