@@ -411,6 +411,8 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       active_feed_(3 * pool_),
       release_(3 * pool_),
       key_feed_(pool_, levels_),
+      feed_v_(pool_, 0.0),
+      feed_k_(pool_, kInf),
       overflow_(3 * buffer.capacity()),
       r_zone_(buffer.capacity()),
       check_(check_reference_walk),
@@ -741,12 +743,9 @@ void AccelLimitedAccDec::set_keys(std::size_t g) {
     const double h = cap.v - 0.5 * a0_;
     key_lattice_.set(g, h * h + k_sigma);
   } else if (cap.feed) {
-    std::array<double, kMaxLevels> keys;
-    for (std::size_t j = 0; j < levels_; ++j) {
-      const double v = static_cast<double>(j) * level_step_ * cap.v;
-      keys[j] = v * v + k_sigma;
-    }
-    key_feed_.set(g - pool_, keys.data());
+    feed_v_[g - pool_] = cap.v;
+    feed_k_[g - pool_] = k_sigma;
+    update_feed_group(g - pool_);
   } else {
     key_geo_.set(g, cap.v * cap.v + k_sigma);
   }
@@ -772,10 +771,28 @@ void AccelLimitedAccDec::clear_keys(std::size_t g) {
   if (cap.lattice) {
     key_lattice_.set(g, MinTree::kEmpty);
   } else if (cap.feed) {
-    key_feed_.clear(g - pool_);
+    feed_k_[g - pool_] = kInf;
+    update_feed_group(g - pool_);
   } else {
     key_geo_.set(g, MinTree::kEmpty);
   }
+}
+
+void AccelLimitedAccDec::update_feed_group(std::size_t i) {
+  // The minima of the group of feed ids around i, level by level: the keys set_keys() gave
+  // them, (j·step·V)² + 2·A0·σ(c), the same doubles (feed_key()).
+  std::array<double, kMaxLevels> m;
+  m.fill(kInf);
+  const std::size_t lo = i / planner::MinTreeGroups::kFan * planner::MinTreeGroups::kFan;
+  const std::size_t hi = std::min(pool_, lo + planner::MinTreeGroups::kFan);
+  for (std::size_t k = lo; k < hi; ++k) {
+    if (feed_k_[k] == kInf) continue;
+    for (std::size_t j = 0; j < levels_; ++j) {
+      const double key = feed_key(k, j);
+      m[j] = key < m[j] ? key : m[j];
+    }
+  }
+  key_feed_.set_group(i / planner::MinTreeGroups::kFan, m.data());
 }
 
 void AccelLimitedAccDec::activate(std::size_t g) {

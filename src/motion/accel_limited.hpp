@@ -20,8 +20,8 @@
 namespace cncore::motion {
 
 class AccelLimitedAccDec final : public AccDec {
-  // The per-slot and per-cap arrays (~6 MB for a 10 000-block window) come from huge pages
-  // like the kernel's other buffers (planner/huge_pages.hpp: a faster construction).
+  // The per-slot and per-cap arrays and the trees (~4.7 MB for a 10 000-block window) come from
+  // huge pages like the kernel's other buffers (planner/huge_pages.hpp: a faster construction).
   template <typename T>
   using Buf = std::vector<T, planner::HugePageAllocator<T>>;
 
@@ -160,15 +160,24 @@ class AccelLimitedAccDec final : public AccDec {
   // cap of the joint at its start), each holding at most one cap of its kind, so a pool of
   // capacity + 1 ids per kind (the overflow position included) never runs out.
   std::size_t pool_;
-  std::vector<Cap> caps_;  // by id g
-  Buf<State> state_;       // by id g
+  Buf<Cap> caps_;     // by id g (huge pages: 1.2 MB on 4 KB pages was ~300 faults per kernel)
+  Buf<State> state_;  // by id g
   Buf<std::uint32_t> owner_, where_;
   Buf<std::uint32_t> free_;  // free ids per kind: free_[kind·pool_ + k], k < free_n_
   std::array<std::size_t, 3> free_n_{};
   planner::MinTree entry_, key_geo_, key_lattice_, active_geo_, active_feed_, release_;
   // One tree per override level (levels_ ≤ kMaxLevels), over the feed pool's ids (g − pool_).
+  // Its leaves are not stored: feed_v_[i] (V of an approaching feed cap) and feed_k_[i]
+  // (2·A0·σ(c); kInf: no key) give leaf i's key at level j, feed_key(); update_feed_group()
+  // hands the tree a group's minima.
   static constexpr std::size_t kMaxLevels = 41;
-  planner::MinTreeRows key_feed_;
+  planner::MinTreeGroups key_feed_;
+  Buf<double> feed_v_, feed_k_;
+  double feed_key(std::size_t i, std::size_t level) const {
+    const double v = static_cast<double>(level) * level_step_ * feed_v_[i];
+    return v * v + feed_k_[i];
+  }
+  void update_feed_group(std::size_t i);
   // Positions 3·capacity + k (k = 0, 1, 2): active caps of retired segments, merged (detach()).
   std::size_t overflow_;
   planner::MinTree r_zone_;  // by buffer slot, see update_r()
