@@ -991,11 +991,24 @@ double AccelLimitedAccDec::sigma_at(double pos_mm) const {
   if (!have_prev_ || pos_mm >= prev_end_mm_ || buf_.empty()) return sigma_total_;
   // The last item starting at or before pos_mm (items are in path order), then back to a
   // motion item: O(log n), only when the stop position changes.
-  std::uint64_t lo = std::max(cur_, buf_.begin_index()), hi = buf_.end_index();
+  const std::uint64_t first = std::max(cur_, buf_.begin_index());
+  std::uint64_t lo = first, hi = buf_.end_index();
   if (lo >= hi) return sigma_total_;
+  // s0 of item k is the end of item k − 1, read from the buffer's compact array: a probe of 8
+  // bytes instead of a cold ~330-byte Segment. Galloping back from the window's end first (the
+  // caps of a new block, and their zones, ask for positions near it), then bisection:
+  // invariant s0(hi) > pos (or hi the end), and lo = first or s0(lo) ≤ pos.
+  for (std::uint64_t step = 1; hi - first > step; step *= 2) {
+    const std::uint64_t probe = hi - step;
+    if (buf_.end_mm_of(probe - 1) <= pos_mm) {
+      lo = probe;
+      break;
+    }
+    hi = probe;
+  }
   while (hi - lo > 1) {
     const std::uint64_t mid = lo + (hi - lo) / 2;
-    if (buf_[mid].s0_mm <= pos_mm) {
+    if (buf_.end_mm_of(mid - 1) <= pos_mm) {
       lo = mid;
     } else {
       hi = mid;
@@ -1100,7 +1113,9 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   // of step 1 (all in a). So the larger of both must fit in the other's direction too.
   const double r_hi = std::max(ratio_[sa], ratio_[slot_b]);
   const double around = std::max(vcap_[sa], vcap_[slot_b]);  // as in on_joint
-  const double corner = planner::joint_speed_pc(a, b, lim_, false);
+  const double corner =
+      corner_index_a_ == index_a ? corner_pc_ : planner::joint_speed_pc(a, b, lim_, false);
+  corner_index_a_ = ~std::uint64_t{0};
   double v0 = std::min(around, corner);
   // After a capped joint close before (at a's start, chained; no filter) the tool cannot be
   // faster here than it can get from that cap: ≤ √(Vp² + 2·A0·d) + 2·A0 within d of it

@@ -31,6 +31,13 @@ class AccelLimitedAccDec final : public AccDec {
   AccelLimitedAccDec(const planner::SegmentBuffer& buffer, const planner::Limits& limits,
                      double or_max, bool check_reference_walk = false);
 
+  // The kernel computed planner::joint_speed_pc(item index_a, the next segment, limits, false)
+  // for the joint the next on_segment() closes: joint_zones() takes it instead of computing the
+  // same double again (a per-block cost of fine programs).
+  void set_next_corner(std::uint64_t index_a, double corner_pc) {
+    corner_index_a_ = index_a;
+    corner_pc_ = corner_pc;
+  }
   void on_segment(std::uint64_t index, const planner::Segment& s) override;
   void on_joint(std::uint64_t index_a, const planner::Segment& a,
                 const planner::Segment& b) override;
@@ -154,6 +161,8 @@ class AccelLimitedAccDec final : public AccDec {
   // The cap of a chain of corners ending there (both joints), where its zone's floor needs one.
   double zone_chain_vg_ = std::numeric_limits<double>::infinity();
   std::uint64_t zone_index_a_ = ~std::uint64_t{0};
+  std::uint64_t corner_index_a_ = ~std::uint64_t{0};  // set_next_corner()
+  double corner_pc_ = 0;
   double sigma_total_ = 0;
 
   // Caps: three positions per buffer slot (range cap of the segment's speed, of its feed, the
