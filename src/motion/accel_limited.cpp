@@ -620,20 +620,24 @@ void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const
   double vg = std::min(corner, around);
   // Lowered where the turn leaves too little of the axis budget for the speed change (7.).
   if (zone_index_a_ == index_a) vg = std::min(vg, zone_vg_);
+  // The directions at the joint, as joint_zones() computed them for it (the same doubles).
+  const bool zoned = zone_index_a_ == index_a;
+  const AxisVec a_end = zoned ? zone_e_ : a.end_direction();
+  const AxisVec b_start = zoned ? zone_s_ : b.start_direction();
   const bool chained = prev_.valid && prev_.index_b == index_a;
   // A segment shorter than one step lets one cycle turn two corners at once (from the end of
   // the segment before a to the start of b; after another short one, three). Either the speed
   // stays ≤ a's length (no step skips a) or the combined turn is allowed (as in the moving
   // average type). Only where the combined turn allows less than the caps already in force.
   if (chained && a.length_mm < vg) {
-    const double pair = planner::turn_speed_pc(prev_.end_dir, b.start_direction(), lim_);
+    const double pair = planner::turn_speed_pc(prev_.end_dir, b_start, lim_);
     double both = pair < 0.999 * std::min(prev_.vg, vg) ? pair : kInf;
     // The chain's turn beside the speed change its zone allows (joint_zones(), 7.).
     if (zone_index_a_ == index_a && zone_chain_vg_ < 0.999 * prev_.vg) {
       both = std::min(both, zone_chain_vg_);
     }
     if (prev_.short_a) {
-      const double triple = planner::turn_speed_pc(prev_.end_dir2, b.start_direction(), lim_);
+      const double triple = planner::turn_speed_pc(prev_.end_dir2, b_start, lim_);
       if (triple < 0.999 * std::min({prev_.vg2, prev_.vg, vg})) both = std::min(both, triple);
     }
     if (both < kInf) {
@@ -649,17 +653,17 @@ void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const
       }
     }
   }
-  const AxisVec before = chained ? prev_.end_dir : a.end_direction();
+  const AxisVec before = chained ? prev_.end_dir : a_end;
   const double vg_before = chained ? prev_.vg : kInf;
   prev_ = {true,
            index_a,
            buf_.end_index() - 1,
-           a.end_direction(),
+           a_end,
            before,
            vg,
            vg_before,
            a.length_mm < vg,
-           a.start_direction(),
+           zoned ? zone_a_start_ : a.start_direction(),
            a.length_mm,
            a.arc && a.rho_mm > 0 ? a.length_mm / a.rho_mm : 0.0};
   // A turn in the same cycle as a speed change: the joint zones (7.) keep both within every
@@ -1107,6 +1111,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   const Segment& a = buf_[index_a];
   const std::size_t sa = buf_.slot(index_a);
   const AxisVec e = a.end_direction(), s = b.start_direction();
+  const AxisVec a_start = a.start_direction();  // (on_joint() needs it too)
   const double r_ab = std::min(ratio_[sa], ratio_[slot_b]);
   // A pair of steps around the joint changes speed by up to the r of either side: an increase
   // by the r where step 2 goes (all in b when the sample is on the joint), a decrease by the r
@@ -1246,13 +1251,12 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   zone_chain_vg_ = kInf;
   double chain_mm = 0;
   double r_top = r_hi;
-  if (prev_.valid && prev_.index_b == index_a && a.length_mm < vj &&
-      !straight_joint(a.end_direction(), s)) {
+  if (prev_.valid && prev_.index_b == index_a && a.length_mm < vj && !straight_joint(e, s)) {
     const double xr = prev_.index_a >= buf_.begin_index() ? ratio_[buf_.slot(prev_.index_a)] : 1.0;
     r_top = std::max(r_hi, xr);
-    ChainMid mids[2] = {{prev_.a_start_dir, prev_.end_dir, prev_.a_len_mm, prev_.a_sweep_rad},
-                        {a.start_direction(), a.end_direction(), a.length_mm,
-                         a.arc && a.rho_mm > 0 ? a.length_mm / a.rho_mm : 0.0}};
+    ChainMid mids[2] = {
+        {prev_.a_start_dir, prev_.end_dir, prev_.a_len_mm, prev_.a_sweep_rad},
+        {a_start, e, a.length_mm, a.arc && a.rho_mm > 0 ? a.length_mm / a.rho_mm : 0.0}};
     auto chain = [&](const AxisVec& from, const ChainMid* m, std::size_t n, double v_in) {
       double mid_mm = 0;
       for (std::size_t k = 0; k < n; ++k) mid_mm += m[k].len_mm;
@@ -1272,7 +1276,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
         zone_chain_vg_ = std::min(zone_chain_vg_, mid_mm);
       }
     };
-    if (!straight_joint(prev_.end_dir, a.start_direction())) {
+    if (!straight_joint(prev_.end_dir, a_start)) {
       chain(prev_.end_dir, &mids[1], 1, std::min(prev_.vg, vj));
     }
     if (prev_.short_a && !straight_joint(prev_.end_dir2, prev_.a_start_dir)) {
@@ -1285,6 +1289,9 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   zone_vg_ = cap_v;
   zone_joint_pc_ = corner;
   zone_index_a_ = index_a;
+  zone_e_ = e;
+  zone_s_ = s;
+  zone_a_start_ = a_start;
   const double rj = std::max(d / a0_, 1e-6);
   // Every step within V of the joint is ≤ V: the joint cap's Vg when there is one, else the
   // segments' caps.

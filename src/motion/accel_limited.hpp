@@ -158,6 +158,8 @@ class AccelLimitedAccDec final : public AccDec {
   // joint cap when lower than the segments' caps; see 7.).
   double zone_vg_ = 0;
   double zone_joint_pc_ = 0;  // planner::joint_speed_pc of that joint (on_joint reuses it)
+  // The directions at that joint (a's end, b's start) and at a's start (on_joint reuses them).
+  AxisVec zone_e_, zone_s_, zone_a_start_;
   // The cap of a chain of corners ending there (both joints), where its zone's floor needs one.
   double zone_chain_vg_ = std::numeric_limits<double>::infinity();
   std::uint64_t zone_index_a_ = ~std::uint64_t{0};
