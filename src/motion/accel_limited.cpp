@@ -1110,7 +1110,10 @@ double AccelLimitedAccDec::r_span(double from_mm, double to_mm) const {
 void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, const Segment& b) {
   const Segment& a = buf_[index_a];
   const std::size_t sa = buf_.slot(index_a);
-  const AxisVec e = a.end_direction(), s = b.start_direction();
+  // (Directions and corner speed from the kernel when it computed them for this joint.)
+  const bool given = corner_index_a_ == index_a;
+  const AxisVec e = given ? corner_e_ : a.end_direction();
+  const AxisVec s = given ? corner_s_ : b.start_direction();
   const AxisVec a_start = a.start_direction();  // (on_joint() needs it too)
   const double r_ab = std::min(ratio_[sa], ratio_[slot_b]);
   // A pair of steps around the joint changes speed by up to the r of either side: an increase
@@ -1118,8 +1121,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   // of step 1 (all in a). So the larger of both must fit in the other's direction too.
   const double r_hi = std::max(ratio_[sa], ratio_[slot_b]);
   const double around = std::max(vcap_[sa], vcap_[slot_b]);  // as in on_joint
-  const double corner =
-      corner_index_a_ == index_a ? corner_pc_ : planner::joint_speed_pc(a, b, lim_, false);
+  const double corner = given ? corner_pc_ : planner::joint_speed_pc(a, b, lim_, false);
   corner_index_a_ = ~std::uint64_t{0};
   double v0 = std::min(around, corner);
   // After a capped joint close before (at a's start, chained; no filter) the tool cannot be

@@ -32,11 +32,15 @@ class AccelLimitedAccDec final : public AccDec {
                      double or_max, bool check_reference_walk = false);
 
   // The kernel computed planner::joint_speed_pc(item index_a, the next segment, limits, false)
-  // for the joint the next on_segment() closes: joint_zones() takes it instead of computing the
-  // same double again (a per-block cost of fine programs).
-  void set_next_corner(std::uint64_t index_a, double corner_pc) {
+  // for the joint the next on_segment() closes, and the directions there (a's end, b's start):
+  // joint_zones() takes them instead of computing the same doubles again (a per-block cost of
+  // fine programs).
+  void set_next_corner(std::uint64_t index_a, double corner_pc, const AxisVec& a_end,
+                       const AxisVec& b_start) {
     corner_index_a_ = index_a;
     corner_pc_ = corner_pc;
+    corner_e_ = a_end;
+    corner_s_ = b_start;
   }
   void on_segment(std::uint64_t index, const planner::Segment& s) override;
   void on_joint(std::uint64_t index_a, const planner::Segment& a,
@@ -165,6 +169,7 @@ class AccelLimitedAccDec final : public AccDec {
   std::uint64_t zone_index_a_ = ~std::uint64_t{0};
   std::uint64_t corner_index_a_ = ~std::uint64_t{0};  // set_next_corner()
   double corner_pc_ = 0;
+  AxisVec corner_e_, corner_s_;
   double sigma_total_ = 0;
 
   // Caps: three positions per buffer slot (range cap of the segment's speed, of its feed, the

@@ -149,7 +149,10 @@ struct Kernel::Impl {
       const bool slow_stops = !accel_type(options);
       // The moving average needs this same value in on_joint: computed once (push is the
       // per-block cost that P7's 100x finer programs multiply).
-      const double vg = joint ? planner::joint_speed_pc(buf[last_motion], seg, lim, slow_stops) : 0;
+      AxisVec a_end, b_start;  // the directions at the joint (the acceleration type's zones)
+      const double vg =
+          joint ? planner::joint_speed_pc(buf[last_motion], seg, lim, slow_stops, a_end, b_start)
+                : 0;
       if (joint && vg <= 0) {
         // A joint that must be passed at speed 0 (exact path through the post filter): a stop
         // that also waits for the post filter to settle, so the corner is not rounded.
@@ -157,7 +160,9 @@ struct Kernel::Impl {
       }
       any_fixed = any_fixed || seg.override_fixed;
       const std::uint64_t idx = buf.push(seg);
-      if (joint && al != nullptr) al->set_next_corner(last_motion, vg);  // (slow_stops false)
+      if (joint && al != nullptr) {
+        al->set_next_corner(last_motion, vg, a_end, b_start);  // (slow_stops false)
+      }
       acc.on_segment(idx, buf[idx]);
       if (have_motion && !barrier_since_motion && last_motion >= buf.begin_index()) {
         if (ma != nullptr) {
