@@ -12,9 +12,11 @@
 // cache's CNCORE_SHARED_DIR), --mlock (mlockall(MCL_CURRENT | MCL_FUTURE) before measuring),
 // --runs N (runs per latency benchmark, default 3), --histogram (print the per-cycle latency
 // histograms to stderr), --digest (print a hash of
-// every program's samples instead of benchmarking).
+// every program's samples instead of benchmarking), --construct TYPE N (time N kernel
+// constructions in a row instead of benchmarking).
 #include <benchmark/benchmark.h>
 #include <sys/mman.h>
+#include <sys/resource.h>
 #include <x86intrin.h>
 
 #include <algorithm>
@@ -463,6 +465,31 @@ int profile(const std::string& name, const std::string& type, int runs) {
   return 1;
 }
 
+// --construct TYPE N: constructs N kernels of TYPE in a row (built-in machine, 10 000-block
+// window) and prints each one's wall time and the page faults it took (getrusage's minor
+// faults): the cost the benchmarks above leave out, which a whole `cncore run` pays once. Run it
+// in a fresh process for the first construction's figure: later ones reuse the memory the
+// earlier kernels freed (huge_pages.hpp keeps an empty region).
+int construct(const std::string& type, int n) {
+  const MachineConfig m = default_machine_config();
+  const int t = type == "moving_average" ? 0 : 1;
+  for (int i = 0; i < n; ++i) {
+    rusage r0{}, r1{};
+    getrusage(RUSAGE_SELF, &r0);
+    const auto w0 = std::chrono::steady_clock::now();
+    double ms = 0;
+    {
+      motion::Kernel k(m, options(t));
+      benchmark::DoNotOptimize(&k);
+      ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - w0).count();
+      getrusage(RUSAGE_SELF, &r1);
+    }
+    std::printf("%s kernel %d: %.3f ms, %ld page faults\n", type_name(t), i + 1, ms,
+                r1.ru_minflt - r0.ru_minflt);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -470,6 +497,8 @@ int main(int argc, char** argv) {
   bool lock = false, digest = false;
   std::string prof_name, prof_type;
   int prof_runs = 0;
+  std::string construct_type;
+  int construct_n = 0;
   for (int i = 0; i < argc; ++i) {
     if (std::strcmp(argv[i], "--mlock") == 0) {
       lock = true;
@@ -479,6 +508,9 @@ int main(int argc, char** argv) {
       prof_name = argv[++i];
       prof_type = argv[++i];
       prof_runs = std::max(1, std::atoi(argv[++i]));
+    } else if (std::strcmp(argv[i], "--construct") == 0 && i + 2 < argc) {
+      construct_type = argv[++i];
+      construct_n = std::max(1, std::atoi(argv[++i]));
     } else if (std::strcmp(argv[i], "--histogram") == 0) {
       g_histogram = true;
     } else if (std::strcmp(argv[i], "--runs") == 0 && i + 1 < argc) {
@@ -508,6 +540,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (prof_runs > 0) return profile(prof_name, prof_type, prof_runs);
+  if (construct_n > 0) return construct(construct_type, construct_n);
   for (int type = 0; type < 2; ++type) {
     for (LazyProgram& p : progs) {
       const std::string suffix = p.name + "/" + type_name(type);

@@ -411,6 +411,8 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       active_feed_(3 * pool_),
       release_(3 * pool_),
       key_feed_(pool_, levels_),
+      feed_v_(pool_, 0.0),
+      feed_k_(pool_, kInf),
       overflow_(3 * buffer.capacity()),
       r_zone_(buffer.capacity()),
       check_(check_reference_walk),
@@ -618,20 +620,24 @@ void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const
   double vg = std::min(corner, around);
   // Lowered where the turn leaves too little of the axis budget for the speed change (7.).
   if (zone_index_a_ == index_a) vg = std::min(vg, zone_vg_);
+  // The directions at the joint, as joint_zones() computed them for it (the same doubles).
+  const bool zoned = zone_index_a_ == index_a;
+  const AxisVec a_end = zoned ? zone_e_ : a.end_direction();
+  const AxisVec b_start = zoned ? zone_s_ : b.start_direction();
   const bool chained = prev_.valid && prev_.index_b == index_a;
   // A segment shorter than one step lets one cycle turn two corners at once (from the end of
   // the segment before a to the start of b; after another short one, three). Either the speed
   // stays ≤ a's length (no step skips a) or the combined turn is allowed (as in the moving
   // average type). Only where the combined turn allows less than the caps already in force.
   if (chained && a.length_mm < vg) {
-    const double pair = planner::turn_speed_pc(prev_.end_dir, b.start_direction(), lim_);
+    const double pair = planner::turn_speed_pc(prev_.end_dir, b_start, lim_);
     double both = pair < 0.999 * std::min(prev_.vg, vg) ? pair : kInf;
     // The chain's turn beside the speed change its zone allows (joint_zones(), 7.).
     if (zone_index_a_ == index_a && zone_chain_vg_ < 0.999 * prev_.vg) {
       both = std::min(both, zone_chain_vg_);
     }
     if (prev_.short_a) {
-      const double triple = planner::turn_speed_pc(prev_.end_dir2, b.start_direction(), lim_);
+      const double triple = planner::turn_speed_pc(prev_.end_dir2, b_start, lim_);
       if (triple < 0.999 * std::min({prev_.vg2, prev_.vg, vg})) both = std::min(both, triple);
     }
     if (both < kInf) {
@@ -647,17 +653,17 @@ void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const
       }
     }
   }
-  const AxisVec before = chained ? prev_.end_dir : a.end_direction();
+  const AxisVec before = chained ? prev_.end_dir : a_end;
   const double vg_before = chained ? prev_.vg : kInf;
   prev_ = {true,
            index_a,
            buf_.end_index() - 1,
-           a.end_direction(),
+           a_end,
            before,
            vg,
            vg_before,
            a.length_mm < vg,
-           a.start_direction(),
+           zoned ? zone_a_start_ : a.start_direction(),
            a.length_mm,
            a.arc && a.rho_mm > 0 ? a.length_mm / a.rho_mm : 0.0};
   // A turn in the same cycle as a speed change: the joint zones (7.) keep both within every
@@ -741,12 +747,9 @@ void AccelLimitedAccDec::set_keys(std::size_t g) {
     const double h = cap.v - 0.5 * a0_;
     key_lattice_.set(g, h * h + k_sigma);
   } else if (cap.feed) {
-    std::array<double, kMaxLevels> keys;
-    for (std::size_t j = 0; j < levels_; ++j) {
-      const double v = static_cast<double>(j) * level_step_ * cap.v;
-      keys[j] = v * v + k_sigma;
-    }
-    key_feed_.set(g - pool_, keys.data());
+    feed_v_[g - pool_] = cap.v;
+    feed_k_[g - pool_] = k_sigma;
+    update_feed_group(g - pool_);
   } else {
     key_geo_.set(g, cap.v * cap.v + k_sigma);
   }
@@ -772,10 +775,28 @@ void AccelLimitedAccDec::clear_keys(std::size_t g) {
   if (cap.lattice) {
     key_lattice_.set(g, MinTree::kEmpty);
   } else if (cap.feed) {
-    key_feed_.clear(g - pool_);
+    feed_k_[g - pool_] = kInf;
+    update_feed_group(g - pool_);
   } else {
     key_geo_.set(g, MinTree::kEmpty);
   }
+}
+
+void AccelLimitedAccDec::update_feed_group(std::size_t i) {
+  // The minima of the group of feed ids around i, level by level: the keys set_keys() gave
+  // them, (j·step·V)² + 2·A0·σ(c), the same doubles (feed_key()).
+  std::array<double, kMaxLevels> m;
+  m.fill(kInf);
+  const std::size_t lo = i / planner::MinTreeGroups::kFan * planner::MinTreeGroups::kFan;
+  const std::size_t hi = std::min(pool_, lo + planner::MinTreeGroups::kFan);
+  for (std::size_t k = lo; k < hi; ++k) {
+    if (feed_k_[k] == kInf) continue;
+    for (std::size_t j = 0; j < levels_; ++j) {
+      const double key = feed_key(k, j);
+      m[j] = key < m[j] ? key : m[j];
+    }
+  }
+  key_feed_.set_group(i / planner::MinTreeGroups::kFan, m.data());
 }
 
 void AccelLimitedAccDec::activate(std::size_t g) {
@@ -974,11 +995,24 @@ double AccelLimitedAccDec::sigma_at(double pos_mm) const {
   if (!have_prev_ || pos_mm >= prev_end_mm_ || buf_.empty()) return sigma_total_;
   // The last item starting at or before pos_mm (items are in path order), then back to a
   // motion item: O(log n), only when the stop position changes.
-  std::uint64_t lo = std::max(cur_, buf_.begin_index()), hi = buf_.end_index();
+  const std::uint64_t first = std::max(cur_, buf_.begin_index());
+  std::uint64_t lo = first, hi = buf_.end_index();
   if (lo >= hi) return sigma_total_;
+  // s0 of item k is the end of item k − 1, read from the buffer's compact array: a probe of 8
+  // bytes instead of a cold ~330-byte Segment. Galloping back from the window's end first (the
+  // caps of a new block, and their zones, ask for positions near it), then bisection:
+  // invariant s0(hi) > pos (or hi the end), and lo = first or s0(lo) ≤ pos.
+  for (std::uint64_t step = 1; hi - first > step; step *= 2) {
+    const std::uint64_t probe = hi - step;
+    if (buf_.end_mm_of(probe - 1) <= pos_mm) {
+      lo = probe;
+      break;
+    }
+    hi = probe;
+  }
   while (hi - lo > 1) {
     const std::uint64_t mid = lo + (hi - lo) / 2;
-    if (buf_[mid].s0_mm <= pos_mm) {
+    if (buf_.end_mm_of(mid - 1) <= pos_mm) {
       lo = mid;
     } else {
       hi = mid;
@@ -1076,14 +1110,19 @@ double AccelLimitedAccDec::r_span(double from_mm, double to_mm) const {
 void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, const Segment& b) {
   const Segment& a = buf_[index_a];
   const std::size_t sa = buf_.slot(index_a);
-  const AxisVec e = a.end_direction(), s = b.start_direction();
+  // (Directions and corner speed from the kernel when it computed them for this joint.)
+  const bool given = corner_index_a_ == index_a;
+  const AxisVec e = given ? corner_e_ : a.end_direction();
+  const AxisVec s = given ? corner_s_ : b.start_direction();
+  const AxisVec a_start = a.start_direction();  // (on_joint() needs it too)
   const double r_ab = std::min(ratio_[sa], ratio_[slot_b]);
   // A pair of steps around the joint changes speed by up to the r of either side: an increase
   // by the r where step 2 goes (all in b when the sample is on the joint), a decrease by the r
   // of step 1 (all in a). So the larger of both must fit in the other's direction too.
   const double r_hi = std::max(ratio_[sa], ratio_[slot_b]);
   const double around = std::max(vcap_[sa], vcap_[slot_b]);  // as in on_joint
-  const double corner = planner::joint_speed_pc(a, b, lim_, false);
+  const double corner = given ? corner_pc_ : planner::joint_speed_pc(a, b, lim_, false);
+  corner_index_a_ = ~std::uint64_t{0};
   double v0 = std::min(around, corner);
   // After a capped joint close before (at a's start, chained; no filter) the tool cannot be
   // faster here than it can get from that cap: ≤ √(Vp² + 2·A0·d) + 2·A0 within d of it
@@ -1214,13 +1253,12 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   zone_chain_vg_ = kInf;
   double chain_mm = 0;
   double r_top = r_hi;
-  if (prev_.valid && prev_.index_b == index_a && a.length_mm < vj &&
-      !straight_joint(a.end_direction(), s)) {
+  if (prev_.valid && prev_.index_b == index_a && a.length_mm < vj && !straight_joint(e, s)) {
     const double xr = prev_.index_a >= buf_.begin_index() ? ratio_[buf_.slot(prev_.index_a)] : 1.0;
     r_top = std::max(r_hi, xr);
-    ChainMid mids[2] = {{prev_.a_start_dir, prev_.end_dir, prev_.a_len_mm, prev_.a_sweep_rad},
-                        {a.start_direction(), a.end_direction(), a.length_mm,
-                         a.arc && a.rho_mm > 0 ? a.length_mm / a.rho_mm : 0.0}};
+    ChainMid mids[2] = {
+        {prev_.a_start_dir, prev_.end_dir, prev_.a_len_mm, prev_.a_sweep_rad},
+        {a_start, e, a.length_mm, a.arc && a.rho_mm > 0 ? a.length_mm / a.rho_mm : 0.0}};
     auto chain = [&](const AxisVec& from, const ChainMid* m, std::size_t n, double v_in) {
       double mid_mm = 0;
       for (std::size_t k = 0; k < n; ++k) mid_mm += m[k].len_mm;
@@ -1240,7 +1278,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
         zone_chain_vg_ = std::min(zone_chain_vg_, mid_mm);
       }
     };
-    if (!straight_joint(prev_.end_dir, a.start_direction())) {
+    if (!straight_joint(prev_.end_dir, a_start)) {
       chain(prev_.end_dir, &mids[1], 1, std::min(prev_.vg, vj));
     }
     if (prev_.short_a && !straight_joint(prev_.end_dir2, prev_.a_start_dir)) {
@@ -1253,6 +1291,9 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   zone_vg_ = cap_v;
   zone_joint_pc_ = corner;
   zone_index_a_ = index_a;
+  zone_e_ = e;
+  zone_s_ = s;
+  zone_a_start_ = a_start;
   const double rj = std::max(d / a0_, 1e-6);
   // Every step within V of the joint is ≤ V: the joint cap's Vg when there is one, else the
   // segments' caps.

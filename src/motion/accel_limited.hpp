@@ -20,8 +20,8 @@
 namespace cncore::motion {
 
 class AccelLimitedAccDec final : public AccDec {
-  // The per-slot and per-cap arrays (~6 MB for a 10 000-block window) come from huge pages
-  // like the kernel's other buffers (planner/huge_pages.hpp: a faster construction).
+  // The per-slot and per-cap arrays and the trees (~4.7 MB for a 10 000-block window) come from
+  // huge pages like the kernel's other buffers (planner/huge_pages.hpp: a faster construction).
   template <typename T>
   using Buf = std::vector<T, planner::HugePageAllocator<T>>;
 
@@ -31,6 +31,17 @@ class AccelLimitedAccDec final : public AccDec {
   AccelLimitedAccDec(const planner::SegmentBuffer& buffer, const planner::Limits& limits,
                      double or_max, bool check_reference_walk = false);
 
+  // The kernel computed planner::joint_speed_pc(item index_a, the next segment, limits, false)
+  // for the joint the next on_segment() closes, and the directions there (a's end, b's start):
+  // joint_zones() takes them instead of computing the same doubles again (a per-block cost of
+  // fine programs).
+  void set_next_corner(std::uint64_t index_a, double corner_pc, const AxisVec& a_end,
+                       const AxisVec& b_start) {
+    corner_index_a_ = index_a;
+    corner_pc_ = corner_pc;
+    corner_e_ = a_end;
+    corner_s_ = b_start;
+  }
   void on_segment(std::uint64_t index, const planner::Segment& s) override;
   void on_joint(std::uint64_t index_a, const planner::Segment& a,
                 const planner::Segment& b) override;
@@ -151,24 +162,38 @@ class AccelLimitedAccDec final : public AccDec {
   // joint cap when lower than the segments' caps; see 7.).
   double zone_vg_ = 0;
   double zone_joint_pc_ = 0;  // planner::joint_speed_pc of that joint (on_joint reuses it)
+  // The directions at that joint (a's end, b's start) and at a's start (on_joint reuses them).
+  AxisVec zone_e_, zone_s_, zone_a_start_;
   // The cap of a chain of corners ending there (both joints), where its zone's floor needs one.
   double zone_chain_vg_ = std::numeric_limits<double>::infinity();
   std::uint64_t zone_index_a_ = ~std::uint64_t{0};
+  std::uint64_t corner_index_a_ = ~std::uint64_t{0};  // set_next_corner()
+  double corner_pc_ = 0;
+  AxisVec corner_e_, corner_s_;
   double sigma_total_ = 0;
 
   // Caps: three positions per buffer slot (range cap of the segment's speed, of its feed, the
   // cap of the joint at its start), each holding at most one cap of its kind, so a pool of
   // capacity + 1 ids per kind (the overflow position included) never runs out.
   std::size_t pool_;
-  std::vector<Cap> caps_;  // by id g
-  Buf<State> state_;       // by id g
+  Buf<Cap> caps_;     // by id g (huge pages: 1.2 MB on 4 KB pages was ~300 faults per kernel)
+  Buf<State> state_;  // by id g
   Buf<std::uint32_t> owner_, where_;
   Buf<std::uint32_t> free_;  // free ids per kind: free_[kind·pool_ + k], k < free_n_
   std::array<std::size_t, 3> free_n_{};
   planner::MinTree entry_, key_geo_, key_lattice_, active_geo_, active_feed_, release_;
   // One tree per override level (levels_ ≤ kMaxLevels), over the feed pool's ids (g − pool_).
+  // Its leaves are not stored: feed_v_[i] (V of an approaching feed cap) and feed_k_[i]
+  // (2·A0·σ(c); kInf: no key) give leaf i's key at level j, feed_key(); update_feed_group()
+  // hands the tree a group's minima.
   static constexpr std::size_t kMaxLevels = 41;
-  planner::MinTreeRows key_feed_;
+  planner::MinTreeGroups key_feed_;
+  Buf<double> feed_v_, feed_k_;
+  double feed_key(std::size_t i, std::size_t level) const {
+    const double v = static_cast<double>(level) * level_step_ * feed_v_[i];
+    return v * v + feed_k_[i];
+  }
+  void update_feed_group(std::size_t i);
   // Positions 3·capacity + k (k = 0, 1, 2): active caps of retired segments, merged (detach()).
   std::size_t overflow_;
   planner::MinTree r_zone_;  // by buffer slot, see update_r()

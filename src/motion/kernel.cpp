@@ -70,6 +70,7 @@ struct Kernel::Impl {
         acc_owner(make_accdec(buf, lim, o, m)),
         acc(*acc_owner),
         ma(dynamic_cast<MovingAverageAccDec*>(acc_owner.get())),
+        al(dynamic_cast<AccelLimitedAccDec*>(acc_owner.get())),
         barriers(buf.capacity()),
         events(buf.capacity()),
         post_ring(lim.post_filter() ? lim.post_cycles : 1) {
@@ -148,7 +149,10 @@ struct Kernel::Impl {
       const bool slow_stops = !accel_type(options);
       // The moving average needs this same value in on_joint: computed once (push is the
       // per-block cost that P7's 100x finer programs multiply).
-      const double vg = joint ? planner::joint_speed_pc(buf[last_motion], seg, lim, slow_stops) : 0;
+      AxisVec a_end, b_start;  // the directions at the joint (the acceleration type's zones)
+      const double vg =
+          joint ? planner::joint_speed_pc(buf[last_motion], seg, lim, slow_stops, a_end, b_start)
+                : 0;
       if (joint && vg <= 0) {
         // A joint that must be passed at speed 0 (exact path through the post filter): a stop
         // that also waits for the post filter to settle, so the corner is not rounded.
@@ -156,6 +160,9 @@ struct Kernel::Impl {
       }
       any_fixed = any_fixed || seg.override_fixed;
       const std::uint64_t idx = buf.push(seg);
+      if (joint && al != nullptr) {
+        al->set_next_corner(last_motion, vg, a_end, b_start);  // (slow_stops false)
+      }
       acc.on_segment(idx, buf[idx]);
       if (have_motion && !barrier_since_motion && last_motion >= buf.begin_index()) {
         if (ma != nullptr) {
@@ -195,14 +202,6 @@ struct Kernel::Impl {
   }
 
   bool post_settled() const { return !lim.post_filter() || post_still >= lim.post_cycles; }
-
-  bool all_done() const {
-    if (!ended || bq_size > 0 || !acc.at_rest() || !post_settled()) return false;
-    if (buf.empty()) return true;
-    if (out_idx + 1 < buf.end_index()) return false;
-    const Segment& last = buf[out_idx];
-    return last.kind == ItemKind::kMotion ? acc.tool_mm() >= last.end_mm() : last.done;
-  }
 
   // Moves the output cursor to the item under the tool, handling events on the way. Runs of
   // motion items are skipped by a galloping search up to the next event (events), so a cycle
@@ -337,27 +336,39 @@ struct Kernel::Impl {
     return seg.kind == ItemKind::kMotion && seg.override_fixed ? 1.0 : r;
   }
 
+  // Through the acc/dec's final type: direct (inlined) calls, no virtual dispatch.
   bool step(Sample& out) {
+    if (ma != nullptr) return step_with(*ma, out);
+    if (al != nullptr) return step_with(*al, out);
+    return step_with(acc, out);
+  }
+
+  template <typename A>
+  bool all_done_with(const A& a) const {
+    if (!ended || bq_size > 0 || !a.at_rest() || !post_settled()) return false;
+    if (buf.empty()) return true;
+    if (out_idx + 1 < buf.end_index()) return false;
+    const Segment& last = buf[out_idx];
+    return last.kind == ItemKind::kMotion ? a.tool_mm() >= last.end_mm() : last.done;
+  }
+
+  template <typename A>
+  bool step_with(A& a, Sample& out) {
     if (!started) {
       started = true;
       out = Sample{};
       fill(out, current(), position, path_position, 0);
       return true;
     }
-    if (all_done()) return false;
+    if (all_done_with(a)) return false;
     ++cycle;
     CycleInput in;
     in.or_ratio = cycle_or_ratio();
     in.hold = hold;
     in.stop_mm = stop_mm();
-    // The moving average through its final type: direct (inlined) calls, no virtual dispatch.
-    if (ma != nullptr) {
-      ma->step(in);
-    } else {
-      acc.step(in);
-    }
+    a.step(in);
     clear_events(out);
-    const double tool = ma != nullptr ? ma->tool_mm() : acc.tool_mm();
+    const double tool = a.tool_mm();
     advance_output(tool, out);
     // retire() below drops only items before out_idx: cur stays valid for fill().
     const Segment* cur = current();
@@ -369,7 +380,7 @@ struct Kernel::Impl {
     const AxisVec pos = post_filter(path);
     // Once the program has ended the producer stops asking wants_block(): retire here then.
     if (ended) retire();
-    fill(out, cur, pos, path, ma != nullptr ? ma->tool_speed_pc() : acc.tool_speed_pc());
+    fill(out, cur, pos, path, a.tool_speed_pc());
     return true;
   }
 
@@ -381,6 +392,7 @@ struct Kernel::Impl {
   std::unique_ptr<AccDec> acc_owner;
   AccDec& acc;
   MovingAverageAccDec* ma;  // acc when it is the moving average (non-virtual fast path), else null
+  AccelLimitedAccDec* al;   // acc when it is the acceleration-limited type, else null
 
   AxisVec last_end;     // end of the last pushed motion
   double total_mm = 0;  // its path position

@@ -35,6 +35,11 @@ class SegmentBuffer {
     return static_cast<std::size_t>(index % cap_);
   }
 
+  // end_mm() of item `index` from the compact array seek() probes (the same double). Items are
+  // contiguous along the path (the kernel starts each at the end of the one before), so this is
+  // also s0_mm of item index + 1.
+  double end_mm_of(std::uint64_t index) const { return end_mm_[slot(index)]; }
+
   Segment& operator[](std::uint64_t index) { return items_[slot(index)]; }
   const Segment& operator[](std::uint64_t index) const { return items_[slot(index)]; }
 

@@ -99,8 +99,10 @@ Segment make_motion_segment(const Block& b, const Limits& lim) {
 
   const AxisVec delta = b.end - b.start;
   const double xyz_len = norm(delta.xyz());
-  const double rot_len =
-      std::sqrt(delta[kA] * delta[kA] + delta[kB] * delta[kB] + delta[kC] * delta[kC]);
+  // (Rotary-only moves: their length in degrees; the root only where it is used.)
+  auto rot_len = [&] {
+    return std::sqrt(delta[kA] * delta[kA] + delta[kB] * delta[kB] + delta[kC] * delta[kC]);
+  };
 
   if (b.kind == BlockKind::kArc) {
     const double nn = norm(b.normal);
@@ -136,7 +138,7 @@ Segment make_motion_segment(const Block& b, const Limits& lim) {
       s.rho_mm = (rm * rm + p * p) / rm;
     }
   }
-  if (!s.arc) s.length_mm = xyz_len > kTiny ? xyz_len : rot_len;
+  if (!s.arc) s.length_mm = xyz_len > kTiny ? xyz_len : rot_len();
   if (s.length_mm <= kTiny) {
     s.length_mm = 0;
     return s;
@@ -223,8 +225,16 @@ double turn_speed_pc(const AxisVec& e, const AxisVec& s, const Limits& lim, doub
 
 double joint_speed_pc(const Segment& a, const Segment& b, const Limits& lim,
                       bool slow_corner_stops) {
-  const AxisVec e = a.end_direction();
-  const AxisVec s = b.start_direction();
+  AxisVec e, s;
+  return joint_speed_pc(a, b, lim, slow_corner_stops, e, s);
+}
+
+double joint_speed_pc(const Segment& a, const Segment& b, const Limits& lim, bool slow_corner_stops,
+                      AxisVec& a_end, AxisVec& b_start) {
+  a_end = a.end_direction();
+  b_start = b.start_direction();
+  const AxisVec& e = a_end;
+  const AxisVec& s = b_start;
   const double kappa = (a.arc ? 1 / a.rho_mm : 0.0) + (b.arc ? 1 / b.rho_mm : 0.0);
   double v = std::min({a.vb_pc, b.vb_pc, turn_speed_pc(e, s, lim, kappa)});
   const double turn = norm(s.xyz() - e.xyz());

@@ -111,6 +111,10 @@ Segment make_motion_segment(const Block& block, const Limits& limits);
 // around them into stops (see segment.cpp); the acceleration-limited type passes false.
 double joint_speed_pc(const Segment& a, const Segment& b, const Limits& limits,
                       bool slow_corner_stops = true);
+// The same, also giving the directions it computed at the joint (a's end, b's start), for a
+// caller that needs them too (the acceleration type's joint zones).
+double joint_speed_pc(const Segment& a, const Segment& b, const Limits& limits,
+                      bool slow_corner_stops, AxisVec& a_end, AxisVec& b_start);
 
 // Corner limit alone for a turn from direction e to direction s within one cycle; `curvature`
 // (1/mm): the arcs' own turning next to the corner (0 between lines).

@@ -71,6 +71,40 @@ TEST(MinTree, MatchesAPlainArrayAtEverySize) {
   }
 }
 
+// The group-minima trees against a plain array of leaves: the owner hands over each group's
+// minima after a change (as the acceleration type's feed keys do); every tree's minimum is the
+// plain minimum of its leaves, for sizes around the group and level boundaries.
+TEST(MinTreeGroups, MatchesAPlainArrayAtEverySize) {
+  std::mt19937 rng(11);
+  for (std::size_t n : {1u, 7u, 8u, 9u, 63u, 64u, 65u, 513u, 4097u}) {
+    constexpr std::size_t kWidth = 3;
+    MinTreeGroups t(n, kWidth);
+    std::vector<double> v(n, MinTree::kEmpty);
+    std::uniform_int_distribution<std::size_t> pick(0, n - 1);
+    std::uniform_int_distribution<int> val(0, 20);  // small values: many ties
+    auto tree_value = [&](std::size_t i, std::size_t j) {
+      return v[i] == MinTree::kEmpty ? v[i] : v[i] * static_cast<double>(j + 1) - 3.0 * j;
+    };
+    for (int step = 0; step < 600; ++step) {
+      const std::size_t i = pick(rng);
+      v[i] = val(rng) < 3 ? MinTree::kEmpty : val(rng);
+      double m[kWidth];
+      for (std::size_t j = 0; j < kWidth; ++j) {
+        m[j] = MinTree::kEmpty;
+        for (std::size_t k = i / 8 * 8; k < std::min(n, i / 8 * 8 + 8); ++k) {
+          m[j] = std::min(m[j], tree_value(k, j));
+        }
+      }
+      t.set_group(i / 8, m);
+      for (std::size_t j = 0; j < kWidth; ++j) {
+        double want = MinTree::kEmpty;
+        for (std::size_t k = 0; k < n; ++k) want = std::min(want, tree_value(k, j));
+        ASSERT_EQ(t.min(j), want) << "n " << n << " tree " << j;
+      }
+    }
+  }
+}
+
 // Randomised: points arrive in path order while the commanded and the (lagging) tool
 // positions advance by random steps and the override jumps; every cycle the O(log n)
 // structure and the plain walk give the same Ul, bit for bit.
