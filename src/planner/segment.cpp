@@ -257,7 +257,7 @@ double joint_speed_pc(const Segment& a, const Segment& b, const Limits& lim, boo
   // W is at most the blocks' Vb and feed, and L/T on a block of length L (the filtered speed of
   // a move of L shorter than a ramp peaks at L/T): on tiny segments one crawl passes many
   // corners, and stopping at each would lose T every time.
-  const double t = static_cast<double>(lim.t_cycles);
+  const auto t = static_cast<double>(lim.t_cycles);
   const double w =
       std::min({a.vb_pc, b.vb_pc, a.feed_pc, b.feed_pc, a.length_mm / t, b.length_mm / t});
   if (v < w / 3) v = 0;
