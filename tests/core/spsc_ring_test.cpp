@@ -97,22 +97,20 @@ void stress(std::size_t capacity, std::uint64_t count) {
   Payload p;
   while (expected < count) {
     // Alternate both read styles.
+    bool got = false;
+    if ((expected & 1) == 0) {
+      got = r.try_pop(p);
+    } else if (const Payload* f = r.front(); f != nullptr) {
+      p = *f;
+      r.pop();
+      got = true;
+    }
     // An empty ring yields as the full one does: a consumer spinning through its time slice
     // on a loaded machine (both threads on one core) made a handoff cost a whole slice, and the
     // test ran past ctest's 900 s under load.
-    if ((expected & 1) == 0) {
-      if (!r.try_pop(p)) {
-        std::this_thread::yield();
-        continue;
-      }
-    } else {
-      const Payload* f = r.front();
-      if (f == nullptr) {
-        std::this_thread::yield();
-        continue;
-      }
-      p = *f;
-      r.pop();
+    if (!got) {
+      std::this_thread::yield();
+      continue;
     }
     const Payload want = make_payload(expected);
     if (p.seq != want.seq || p.words != want.words) ++bad;
