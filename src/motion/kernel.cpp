@@ -208,19 +208,23 @@ struct Kernel::Impl {
   // that passes k tiny segments costs O(log k), not O(k).
   void advance_output(double tool, Sample& out) {
     while (out_idx < buf.end_index()) {
-      Segment& it = buf[out_idx];
       const bool has_next = out_idx + 1 < buf.end_index();
-      if (it.kind == ItemKind::kMotion) {
-        if (tool >= it.end_mm() && has_next) {
+      // Motion items from the compact arrays: a cycle that leaves its item loads no Segment.
+      if (buf.is_motion(out_idx)) {
+        if (tool >= buf.end_mm_of(out_idx) && has_next) {
           while (ev_size > 0 && events[ev_head] < out_idx) pop_event();
           const std::uint64_t next_event = ev_size > 0 ? events[ev_head] : UINT64_MAX;
           // The walk stops at the first motion item the tool is inside, the last item, or the
           // next event, whichever comes first.
-          out_idx = buf.seek(out_idx + 1, tool, next_event);
+          // Hint: as many items as the last cycle that left its item skipped.
+          const std::uint64_t from = out_idx;
+          out_idx = buf.seek(from + 1, tool, next_event, from + out_skip);
+          out_skip = out_idx - from;
           continue;
         }
         return;
       }
+      Segment& it = buf[out_idx];
       if (!it.done) {
         if (tool < it.s0_mm) return;
         if (it.barrier && (!acc.at_rest() || !post_settled())) return;
@@ -412,8 +416,9 @@ struct Kernel::Impl {
   double or_ratio = 1;  // override_pct / 100 (set_override)
   std::uint64_t cycle = 0;
   std::uint64_t out_idx = 0;
-  bool any_fixed = false;     // some segment ignores the override (correction "replace")
-  std::uint64_t cmd_idx = 0;  // buffer item under the commanded position (cycle_or_ratio)
+  std::uint64_t out_skip = 1;  // items the output cursor last moved by (advance_output's hint)
+  bool any_fixed = false;      // some segment ignores the override (correction "replace")
+  std::uint64_t cmd_idx = 0;   // buffer item under the commanded position (cycle_or_ratio)
   double correction_now = std::nan("");
   bool dwelling = false;
   std::uint32_t dwell_left = 0;

@@ -111,8 +111,11 @@ const Segment* MovingAverageAccDec::advance_commanded() {
   if (buf_.empty()) return nullptr;
   cmd_idx_ = std::max(cmd_idx_, buf_.begin_index());
   if (cmd_idx_ >= buf_.end_index()) return nullptr;
-  // O(log k) for k items passed this cycle (tiny segments), not O(k).
-  cmd_idx_ = buf_.seek(cmd_idx_, cmd_mm_);
+  // O(log k) for k items passed this cycle (tiny segments), not O(k); O(1) mostly, with the
+  // last cycle's skip as the hint.
+  const std::uint64_t from = cmd_idx_;
+  cmd_idx_ = buf_.seek(from, cmd_mm_, UINT64_MAX, from + cmd_skip_);
+  if (cmd_idx_ > from) cmd_skip_ = cmd_idx_ - from;
   const Segment& s = buf_[cmd_idx_];
   return s.kind == ItemKind::kMotion ? &s : nullptr;
 }

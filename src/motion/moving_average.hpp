@@ -78,6 +78,7 @@ class MovingAverageAccDec final : public AccDec {
   planner::Lookahead la_;
   MovingAverage stage1_, stage2_;
   std::uint64_t cmd_idx_ = 0;           // buffer item under the commanded position
+  std::uint64_t cmd_skip_ = 1;          // items it last moved by (the seek hint)
   std::uint64_t entered_ = UINT64_MAX;  // stop mode: the block whose start wait was done
   std::uint32_t wait_ = 0;              // stop mode: cycles the input is still blocked
   double cmd_mm_ = 0, tool_mm_ = 0, prev_tool_mm_ = 0, tool_step_ = 0;
