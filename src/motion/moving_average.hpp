@@ -73,7 +73,6 @@ class MovingAverageAccDec final : public AccDec {
   const planner::SegmentBuffer& buf_;
   planner::Limits lim_;
   Mode mode_;
-  double or_max_;
   bool check_;
   planner::Lookahead la_;
   MovingAverage stage1_, stage2_;
