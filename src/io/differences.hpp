@@ -39,25 +39,36 @@ class FiniteDifferences {
       linear_[i] = machine.axes[i].enabled && !machine.axes[i].rotary;
       enabled_mask_[i] = enabled_[i] ? 1.0 : 0.0;
       linear_mask_[i] = linear_[i] ? 1.0 : 0.0;
+      if (enabled_[i]) used_axes_ = i + 1;
     }
   }
 
+  // 1 + the last enabled axis: every axis from here on is disabled.
+  std::size_t used_axes() const { return used_axes_; }
+
   // The next set-point; the result stays valid until the next call.
   const CycleDifferences& update(double t_s, const AxisVec& position) {
-    return advance<true>(t_s, position);
+    return advance<true, kMaxAxes>(t_s, position);
   }
   // The same without the accelerations' divisions and square root: acc, tangential and path
   // acceleration are left unset, their numerators dv, dspeed, dv2 are set instead (for a caller
   // that keeps only maxima and can skip most divisions: summary.cpp). Velocities, length and
   // speed as update(); both may be mixed (the state carried between calls is the same).
   const CycleDifferences& update_deltas(double t_s, const AxisVec& position) {
-    return advance<false>(t_s, position);
+    return advance<false, kMaxAxes>(t_s, position);
+  }
+  // update_deltas() over the first N axes only (N >= used_axes()): the same doubles (the axes
+  // left out are disabled: v = 0, and the squared sums gain only trailing +0 terms), with
+  // loops of a fixed length and no work for the axes that cannot move.
+  template <std::size_t N>
+  const CycleDifferences& update_deltas_first(double t_s, const AxisVec& position) {
+    return advance<false, N>(t_s, position);
   }
 
   const CycleDifferences& last() const { return d_; }
 
  private:
-  template <bool kAccel>
+  template <bool kAccel, std::size_t N>
   const CycleDifferences& advance(double t_s, const AxisVec& position) {
     d_.moved = d_.accel = false;
     if (have_prev_) {
@@ -68,12 +79,12 @@ class FiniteDifferences {
         // non-linear one adds +0 to the squared length: the same doubles as skipping them). In
         // plain loops GCC divides two axes per instruction (3 divpd, not 6 divsd).
         AxisVec d, vel;
-        for (std::size_t i = 0; i < kMaxAxes; ++i) {
+        for (std::size_t i = 0; i < N; ++i) {
           d[i] = (position[i] - prev_pos_[i]) * enabled_mask_[i];
         }
-        for (std::size_t i = 0; i < kMaxAxes; ++i) vel[i] = d[i] / dt;
+        for (std::size_t i = 0; i < N; ++i) vel[i] = d[i] / dt;
         double len2 = 0;
-        for (std::size_t i = 0; i < kMaxAxes; ++i) len2 += d[i] * d[i] * linear_mask_[i];
+        for (std::size_t i = 0; i < N; ++i) len2 += d[i] * d[i] * linear_mask_[i];
         d_.moved = true;
         d_.dt_s = dt;
         d_.length_mm = std::sqrt(len2);
@@ -81,7 +92,7 @@ class FiniteDifferences {
         if (have_vel_) {
           const double h = 0.5 * (dt + prev_dt_);
           double dv2 = 0;
-          for (std::size_t i = 0; i < kMaxAxes; ++i) {
+          for (std::size_t i = 0; i < N; ++i) {
             const double dv = vel[i] - d_.vel[i];  // 0 − 0 for a disabled axis
             if constexpr (kAccel) {
               d_.acc[i] = dv / h;
@@ -115,6 +126,7 @@ class FiniteDifferences {
   bool enabled_[kMaxAxes] = {};
   bool linear_[kMaxAxes] = {};
   double enabled_mask_[kMaxAxes] = {}, linear_mask_[kMaxAxes] = {};  // 1.0 / 0.0
+  std::size_t used_axes_ = 0;
   bool have_prev_ = false, have_vel_ = false;
   double prev_t_ = 0, prev_dt_ = 0, prev_speed_ = 0;
   AxisVec prev_pos_;

@@ -127,30 +127,55 @@ void SummaryObserver::close_group() {
     return;
   }
   group_.visits = 1;
-  auto same = std::find_if(top_.begin(), top_.end(),
-                           [&](const SlowSpot& s) { return s.line == group_.line; });
+  // A line group closes every few cycles on short segments: the candidates are searched only
+  // when the line filter says the line may be among them.
+  auto same = top_.end();
+  if (top_lines_[group_.line % kLineFilter] > 0) {
+    same = std::find_if(top_.begin(), top_.end(),
+                        [&](const SlowSpot& s) { return s.line == group_.line; });
+  }
   if (same != top_.end()) {
     same->lost_s += group_.lost_s;
     same->time_s += group_.time_s;
     same->length_mm += group_.length_mm;
     same->programmed_feed_mm_min = group_.programmed_feed_mm_min;
     same->visits += 1;
+    // lost_s only grows: the least candidate stays the least unless it grew itself.
+    if (same - top_.begin() == static_cast<std::ptrdiff_t>(least_) && group_.lost_s != 0) {
+      least_ = kNoLeast;
+    }
   } else if (top_.size() < kSlowCandidates) {
     top_.push_back(group_);
+    ++top_lines_[group_.line % kLineFilter];
+    least_ = kNoLeast;
   } else {
-    auto least =
-        std::min_element(top_.begin(), top_.end(),
-                         [](const SlowSpot& a, const SlowSpot& b) { return a.lost_s < b.lost_s; });
-    if (group_.lost_s > least->lost_s) *least = group_;
+    // The first candidate with the least lost_s (as std::min_element), found again only after
+    // it changed.
+    if (least_ == kNoLeast) {
+      least_ = static_cast<std::size_t>(std::min_element(top_.begin(), top_.end(),
+                                                         [](const SlowSpot& a, const SlowSpot& b) {
+                                                           return a.lost_s < b.lost_s;
+                                                         }) -
+                                        top_.begin());
+    }
+    SlowSpot& least = top_[least_];
+    if (group_.lost_s > least.lost_s) {
+      --top_lines_[least.line % kLineFilter];
+      ++top_lines_[group_.line % kLineFilter];
+      least = group_;
+      least_ = kNoLeast;
+    }
   }
   group_ = SlowSpot{};
 }
 
+template <std::size_t N>
 inline void SummaryObserver::travel_check(const motion::Sample& s) {
   // Every axis at once, without a branch per axis: the limits of axes not checked (disabled,
-  // or already warned) are ±∞, which no position leaves (a NaN leaves none either).
+  // or already warned) are ±∞, which no position leaves (a NaN leaves none either). Axes from
+  // N on are disabled.
   unsigned outside = 0;
-  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+  for (std::size_t i = 0; i < N; ++i) {
     const double p = s.position[i];
     outside |=
         static_cast<unsigned>(p < travel_lo_mm_[i]) | static_cast<unsigned>(p > travel_hi_mm_[i]);
@@ -182,9 +207,28 @@ void SummaryObserver::add_event(const AuxEvent& event) {
 }
 
 void SummaryObserver::on_sample(const motion::Sample& s) {
+  // Machines with X, Y, Z only (the usual case) take loops of 3 axes, fully unrolled: a
+  // shorter cycle, and the next sample's work overlaps more of this one's divisions and root.
+  if (diff_.used_axes() <= 3) {
+    sample<3>(s);
+  } else {
+    sample<kMaxAxes>(s);
+  }
+}
+
+void SummaryObserver::on_samples(std::span<const motion::Sample> samples) {
+  if (diff_.used_axes() <= 3) {
+    for (const motion::Sample& s : samples) sample<3>(s);
+  } else {
+    for (const motion::Sample& s : samples) sample<kMaxAxes>(s);
+  }
+}
+
+template <std::size_t N>
+void SummaryObserver::sample(const motion::Sample& s) {
   ++summary_.cycles;
   summary_.cycle_time_s = s.t_s;
-  travel_check(s);
+  travel_check<N>(s);
   if (!std::isnan(s.correction)) {
     // NaN compares false: the first coefficient seen initialises both.
     if (!(s.correction >= summary_.correction_min)) summary_.correction_min = s.correction;
@@ -240,12 +284,12 @@ void SummaryObserver::on_sample(const motion::Sample& s) {
     // a = (v_k − v_{k−1}) / (distance between interval midpoints): io/differences.hpp.
     // The accelerations only as maxima: update_deltas() leaves their divisions to
     // raise_max_quotient (|Δv / h| = |Δv| / h exactly: rounding is symmetric).
-    const CycleDifferences& d = diff_.update_deltas(s.t_s, s.position);
+    const CycleDifferences& d = diff_.update_deltas_first<N>(s.t_s, s.position);
     if (d.moved) {
       const double dt = d.dt_s;
       // Every axis, without a branch: a disabled axis has vel = acc = 0 (differences.hpp), so
-      // its maxima stay 0.
-      for (std::size_t i = 0; i < kMaxAxes; ++i) {
+      // its maxima stay 0 (those from N on are not visited).
+      for (std::size_t i = 0; i < N; ++i) {
         summary_.max_axis_speed_mm_min[i] =
             std::max(summary_.max_axis_speed_mm_min[i], std::fabs(d.vel[i]) * 60);
       }
@@ -255,7 +299,7 @@ void SummaryObserver::on_sample(const motion::Sample& s) {
       summary_.max_feed_mm_min = std::max(summary_.max_feed_mm_min, speed * 60);
       if (d.accel) {
         const double h = d.h_s;
-        for (std::size_t i = 0; i < kMaxAxes; ++i) {
+        for (std::size_t i = 0; i < N; ++i) {
           raise_max_quotient(summary_.max_axis_accel_mm_s2[i], std::fabs(d.dv[i]), h);
         }
         raise_max_root_quotient(summary_.max_path_accel_mm_s2, d.dv2, h);
@@ -270,7 +314,16 @@ void SummaryObserver::on_sample(const motion::Sample& s) {
         group_.time_s += dt;
         group_.length_mm += len;
         if (const Pending* b = current_block(s.line)) {
-          const double target = std::min(b->feed_mm_min * s.override_pct / 100, b->cap_mm_min);
+          // F × override, capped: computed again only when one of the three changes (a
+          // division per cycle less; the same double).
+          if (b->feed_mm_min != target_feed_ || b->cap_mm_min != target_cap_ ||
+              s.override_pct != target_override_) {
+            target_feed_ = b->feed_mm_min;
+            target_cap_ = b->cap_mm_min;
+            target_override_ = s.override_pct;
+            target_ = std::min(b->feed_mm_min * s.override_pct / 100, b->cap_mm_min);
+          }
+          const double target = target_;
           group_.programmed_feed_mm_min = target;
           group_.rapid = b->rapid;
           if (target > 0 && speed * 60 < target) group_.lost_s += dt * (1 - speed * 60 / target);

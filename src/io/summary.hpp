@@ -94,6 +94,7 @@ class SummaryObserver : public sim::SampleObserver {
 
   void on_block(const Block& block) override;
   void on_sample(const motion::Sample& sample) override;
+  void on_samples(std::span<const motion::Sample> samples) override;
   void on_finish() override;
 
   const Summary& summary() const { return summary_; }
@@ -113,6 +114,9 @@ class SummaryObserver : public sim::SampleObserver {
   };
   const Pending* current_block(std::uint32_t line);
   void close_group();
+  template <std::size_t N>
+  void sample(const motion::Sample& s);  // on_sample with axes N… disabled
+  template <std::size_t N>
   void travel_check(const motion::Sample& s);
   [[gnu::noinline, gnu::cold]] void travel_warn(const motion::Sample& s);
 
@@ -129,6 +133,12 @@ class SummaryObserver : public sim::SampleObserver {
   // Current line group (consecutive samples on one line) for the slowest spots.
   SlowSpot group_;
   std::vector<SlowSpot> top_;  // bounded candidate set, merged by line
+  // How many candidates have a line ≡ i (mod kLineFilter): 0 = the line is surely not there.
+  static constexpr std::size_t kLineFilter = 1024;
+  std::array<std::uint8_t, kLineFilter> top_lines_{};
+  // Index of the candidate with the least lost_s; kNoLeast: to be searched again.
+  static constexpr std::size_t kNoLeast = static_cast<std::size_t>(-1);
+  std::size_t least_ = kNoLeast;
   // travel_check: bit i set while enabled axis i has not left its travel yet; the limits with
   // their slack, computed once (the same doubles as computing them per sample); ±∞ for an axis
   // not checked (disabled, or already warned).
@@ -137,6 +147,9 @@ class SummaryObserver : public sim::SampleObserver {
   bool record_sample_events_ = true;
   double load_sum_pct_ = 0;  // Σ load over the cycles with a reading
   std::uint64_t load_cycles_ = 0;
+  // The last target feed of the slowest spots and what it was computed from (NaN: none yet).
+  double target_feed_ = std::numeric_limits<double>::quiet_NaN();
+  double target_cap_ = 0, target_override_ = 0, target_ = 0;
   bool have_previous_t_ = false;
   double previous_t_s_ = 0;
 };

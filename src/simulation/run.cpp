@@ -329,41 +329,54 @@ RunCounts run_cycles(Source& source, const std::string& program_path, const Mach
   double longest_dwell_s = 0;
   std::uint64_t still_cycles = 0;
   AxisVec last_position;
-  // override_pct: the operator's override in force when the sample's cycle ran.
-  auto deliver = [&](const motion::Sample& s, double override_pct) {
-    if (counts.cycles > 0 && s.position == last_position && override_pct > 0) {
-      if (++still_cycles * machine.period_s > longest_dwell_s + 60) {
-        if (options.cycle_controller != nullptr && override_set <= 0) {
-          // Not a kernel fault: the controller holds the feed at 0 and its load never falls
-          // (a recorded load does not follow the feed).
-          throw InputError(program_path, s.line, 1,
-                           "adaptive feed control has held the feed override at 0 % for 60 s: "
-                           "the measured load never fell below adaptive.threshold_pct (a "
-                           "recorded load does not follow the feed); set adaptive.lower_pct "
-                           "above 0, or an antiwindup policy other than \"none\"");
+  // Hands samples [0, n) of the batch to the observers, each observer all of them in one call.
+  auto deliver = [&](std::size_t n) {
+    if (n == 0) return;
+    counts.cycles += n;
+    for (SampleObserver* o : observers)
+      o->on_samples(std::span<const motion::Sample>(batch.data(), n));
+  };
+  // The watchdog over the batch (override: the operator's override in force when each sample's
+  // cycle ran); a stall is thrown after the samples before it are delivered.
+  auto watch = [&](std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const motion::Sample& s = batch[i];
+      if (counts.cycles + i > 0 && s.position == last_position && batch_override[i] > 0) {
+        if (++still_cycles * machine.period_s > longest_dwell_s + 60) {
+          deliver(i);
+          if (options.cycle_controller != nullptr && override_set <= 0) {
+            // Not a kernel fault: the controller holds the feed at 0 and its load never falls
+            // (a recorded load does not follow the feed).
+            throw InputError(program_path, s.line, 1,
+                             "adaptive feed control has held the feed override at 0 % for 60 s: "
+                             "the measured load never fell below adaptive.threshold_pct (a "
+                             "recorded load does not follow the feed); set adaptive.lower_pct "
+                             "above 0, or an antiwindup policy other than \"none\"");
+          }
+          throw std::runtime_error("motion kernel stalled: no motion for " +
+                                   std::to_string(still_cycles) + " cycles at line " +
+                                   std::to_string(s.line) + ", t = " + std::to_string(s.t_s) +
+                                   " s");
         }
-        throw std::runtime_error("motion kernel stalled: no motion for " +
-                                 std::to_string(still_cycles) + " cycles at line " +
-                                 std::to_string(s.line) + ", t = " + std::to_string(s.t_s) + " s");
+      } else {
+        still_cycles = 0;
       }
-    } else {
-      still_cycles = 0;
+      last_position = s.position;
     }
-    last_position = s.position;
-    ++counts.cycles;
-    for (SampleObserver* o : observers) o->on_sample(s);
   };
   // One interpolation period. The k-th sample (k = 0, 1, ...) has t = k·τ; an override step at
   // time T is set before the first cycle with t >= T, since set_override acts on the next cycle.
   // Samples of consecutive cycles are handed to the observers in batches (issue 3: the kernel's
   // cycles in one tight loop, then the observers', overlap better on the CPU than one cycle of
-  // each in turn). Observers see exactly the same calls in the same order: a batch is
-  // delivered before any on_block (a block is pushed between two cycles), at the end and
-  // before an error goes on. A cycle controller needs each sample at once: no batching then.
+  // each in turn). Each observer sees exactly the same samples and blocks in the same order: a
+  // batch is delivered (to each observer in one on_samples call, one observer after the other)
+  // before any on_block (a block is pushed between two cycles), at the end and before an error
+  // goes on. A cycle controller needs each sample at once: no batching then.
   const std::size_t batch_max = options.cycle_controller != nullptr ? 1 : kSampleBatch;
   std::size_t batched = 0;
   auto flush = [&]() {
-    for (std::size_t i = 0; i < batched; ++i) deliver(batch[i], batch_override[i]);
+    watch(batched);
+    deliver(batched);
     batched = 0;
   };
   std::uint64_t stepped = 0;  // cycles the kernel has run (counts.cycles: delivered)

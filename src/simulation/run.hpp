@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -20,6 +21,11 @@ class SampleObserver {
   virtual ~SampleObserver() = default;
   virtual void on_block(const Block& /*block*/) {}
   virtual void on_sample(const motion::Sample& sample) = 0;
+  // Consecutive samples with no block between them, in order: the same as on_sample on each
+  // (the default), in one virtual call (an observer may override it to loop inline).
+  virtual void on_samples(std::span<const motion::Sample> samples) {
+    for (const motion::Sample& s : samples) on_sample(s);
+  }
   // The run ended normally (all samples delivered).
   virtual void on_finish() {}
 };
