@@ -1597,6 +1597,77 @@ double AccelLimitedAccDec::after_corner() {
   return hi;
 }
 
+double AccelLimitedAccDec::centred_step(std::size_t g, const Segment& a, const Segment& b, double u,
+                                        double free) const {
+  const Cap& cap = caps_[g];
+  const double vg = cap.v, j = b.s0_mm;
+  const AxisVec e = a.end_direction(), sd = b.start_direction();
+  for (std::size_t i = 3; i < kMaxAxes; ++i) {
+    if (e[i] != 0 || sd[i] != 0) return u;
+  }
+  const Vec3 ex = e.xyz(), sx = sd.xyz();
+  const double c = ex.x * sx.x + ex.y * sx.y + ex.z * sx.z;
+  // Not at folds: there the checker may read the sample before j as lying after it (9.).
+  if (c < -0.5) return u;
+  // The next cycle's step u1 is ≤ Vg (the cap is active from c = j − Vg on, and the sample
+  // lands in [c, j)) and ≥ u0 − r_hi·A0: every bound but this cap's allowed u0 here, so it
+  // allows u0 − (mean r over the step)·A0 there (3. (ii); the stop's bounds with a_stop ≤ the
+  // r there), and a hold or an override decrease slows by r·A0. r_hi: the highest r over
+  // [tool, j] (a's, or its tail zone's when the tool is inside it).
+  const std::size_t sa = buf_.slot(cur_);
+  double r_hi = ratio_[sa];
+  if (pos_mm_ - a.s0_mm >= a.length_mm - tail_mm_[sa]) r_hi = std::min(r_hi, tail_r_[sa]);
+  constexpr double kMargin = 1 - 1e-6;
+  const double amax = kMargin * a0_;
+  // The sample α before j between the step u0 (along E) and u1: the chords d0 = u0·E and
+  // d1 = u1·E (u1 ≤ α) or α·E + β·S (β = u1 − α). Per axis |(α − u0)·E_i + β·S_i| ≤ a_i,
+  // tangential |u1 − u0| ≤ A0 (path speeds), normal a_n² = 2·u0·(|d1| − α − β·c) ≤ A0² (as in
+  // after_corner(), increasing in β), resultant |d1 − d0|² ≤ A0². Each is convex in u1 on
+  // u1 ≤ α and on u1 ≥ α, so the ends of both pieces decide.
+  auto sample_ok = [&](double u0, double alpha, double u1) {
+    // (u0 − r·A0 at the low end: the deceleration every braking plan uses.)
+    if (u1 - u0 > amax || u0 - u1 > a0_) return false;
+    const double al = std::min(alpha, u1), beta = std::max(0.0, u1 - alpha);
+    for (std::size_t i = 0; i < 3; ++i) {
+      if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
+      if (std::abs((al - u0) * e[i] + beta * sd[i]) > kMargin * lim_.axis_amax_pc2[i]) {
+        return false;
+      }
+    }
+    if (beta <= 0) return true;
+    const double d1 = std::sqrt(std::max(0.0, al * al + beta * beta + 2 * al * beta * c));
+    if (2 * u0 * (d1 - al - beta * c) > amax * amax) return false;
+    if (lim_.bound_resultant) {
+      const double w = al - u0;
+      if (w * w + beta * beta + 2 * w * beta * c > amax * amax) return false;
+    }
+    return true;
+  };
+  auto feasible = [&](double u0) {
+    const double p1 = pos_mm_ + u0;
+    const double alpha = j - p1;
+    if (!(alpha > 0) || p1 < cap.c_mm || u0 - vg > amax) return false;
+    const double lo = std::max(0.0, std::min(vg, u0 - r_hi * a0_));
+    if (!sample_ok(u0, alpha, vg) || !sample_ok(u0, alpha, lo)) return false;
+    return !(alpha > lo && alpha < vg) || sample_ok(u0, alpha, alpha);
+  };
+  double hi = std::min({free, vg + amax, j - pos_mm_});
+  if (!(hi > u)) return u;
+  if (feasible(hi)) return hi;
+  // The largest feasible step by bisection (each answer is checked itself).
+  double lo = u, best = u;
+  for (int it = 0; it < 8; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    if (feasible(mid)) {
+      best = mid;
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  return best;
+}
+
 void AccelLimitedAccDec::step(const CycleInput& in) {
   advance_current();
   if (!held_cycle_) {
@@ -1805,10 +1876,10 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     }
   }
   if (!stop_far) stop_far = lattice_far && landing_far(a_stop);
-  if (!stop_far) {
+  auto stop_bound = [&](double as) {
     double stop_limit = std::sqrt(a0_ * a0_ / 4 + 2 * a0_ * d_sigma) - a0_ / 2;
-    stop_limit = std::max(stop_limit, std::min(to_stop, a_stop));
-    stop_limit = std::min(stop_limit, landing_step(to_stop, a_stop));
+    stop_limit = std::max(stop_limit, std::min(to_stop, as));
+    stop_limit = std::min(stop_limit, landing_step(to_stop, as));
     // The last V_t = min(A0, a_i)/2 before a stop (the lowest corner cap, a reversal) is run at
     // ≤ V_t: a joint cap that arrives late at a stop's position (the window's tail) then finds
     // the steps around it already within its cap (see 6.).
@@ -1816,12 +1887,49 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
       // In real distance with the local acceleration a (the cap lies within a few steps of the
       // stop; farther away the stop's own σ bound is the stricter one).
       const double tail =
-          to_stop <= vt
-              ? vt
-              : std::sqrt(a_stop * a_stop + vt * vt + 2 * a_stop * (to_stop - vt)) - a_stop;
+          to_stop <= vt ? vt : std::sqrt(as * as + vt * vt + 2 * as * (to_stop - vt)) - as;
       stop_limit = std::min(stop_limit, tail);
     }
-    u = std::min(u, stop_limit);
+    return stop_limit;
+  };
+  if (!stop_far) u = std::min(u, stop_bound(a_stop));
+
+  // 11. A capped corner between two lines just ahead, the step before its crossing: that step
+  // may exceed the cap's braking bound when its sample keeps every limit for each crossing step
+  // the next cycle may take. A bounded few evaluations, only in the one or two cycles before
+  // such a corner.
+  if (lag_ == 0 && !jerk_on_ && !in.hold && u > 0 && to_stop > 0 && !buf_.empty() &&
+      cur_ >= buf_.begin_index() && cur_ + 1 < buf_.end_index()) {
+    const Segment& sa = buf_[cur_];
+    const Segment& sb = buf_[cur_ + 1];
+    const std::size_t cp = 3 * buf_.slot(cur_ + 1) + 2;
+    const double j = sa.end_mm();
+    if (sa.kind == ItemKind::kMotion && sb.kind == ItemKind::kMotion && !sa.arc && !sb.arc &&
+        sb.s0_mm == j && pos_mm_ - step_ >= sa.s0_mm && pos_mm_ + u < j && owner_[cp] != kNone) {
+      const std::size_t g = owner_[cp];
+      const Cap& cap = caps_[g];
+      const double vg = cap.v;
+      if (!cap.feed && j - pos_mm_ > vg && j - pos_mm_ < 2 * vg + a0_ &&
+          std::abs(cap.c_mm + vg - j) <= 1e-9 * std::max(1.0, std::abs(j)) &&
+          sb.length_mm >= 2 * (vg + a0_)) {
+        // The cycle's bound with this joint's cap left out (its key or its active leaf).
+        const bool active = state_[g] == State::kActive;
+        MinTree& t = active ? active_geo_ : (cap.lattice ? key_lattice_ : key_geo_);
+        const double saved = t.at(g);
+        t.set(g, MinTree::kEmpty);
+        double free = std::min({step_ + rise, feed, active_geo_.min(), to_stop, after});
+        if (const double k = key_geo_.min(); k != kInf) free = std::min(free, brake(k, sigma_p));
+        if (const double k = key_lattice_.min(); k != kInf) {
+          free = std::min(free, lattice(k, sigma_p));
+        }
+        t.set(g, saved);
+        if (free > u) {
+          const double as = std::min(a, r_span(pos_mm_, std::nextafter(in.stop_mm, pos_mm_)) * a0_);
+          free = std::min(free, stop_bound(as));
+          if (free > u) u = centred_step(g, sa, sb, u, free);
+        }
+      }
+    }
   }
   u = std::max(0.0, u);
   if (u <= feed_limit) feed_recover_ = false;

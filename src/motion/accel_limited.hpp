@@ -112,6 +112,12 @@ class AccelLimitedAccDec final : public AccDec {
   // this cycle's step from the second difference around the crossing (kInf: none; the joint cap
   // then stays). Clears the joint cap when it returns a limit.
   double after_corner();
+  // The step before a capped corner between two lines, above the cap's braking bound, landing
+  // α before the joint so that the crossing splits the turn (11.): the largest step ≤ `free`
+  // (the cycle's bound without this joint's cap) whose sample keeps every limit for each
+  // crossing step the next cycle may take; `u` when none is larger.
+  double centred_step(std::size_t g, const planner::Segment& a, const planner::Segment& b, double u,
+                      double free) const;
   // Lowers r over the first `mm` of the segment in `slot` to at most `r` (head zone).
   void add_head(std::size_t slot, double mm, double r);
   // A head zone that reaches past the segment it starts in (8.): r ≤ `r` up to path position
