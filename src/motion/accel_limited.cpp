@@ -282,6 +282,7 @@ constexpr double kRecoverShare = 0.98;  // √(a_t² + a_n²) ≤ 0.98·g slowin
 constexpr double kZoneFloor = 0.25;
 constexpr std::size_t kReleasePerCycle = 32;  // pending caps a cycle inserts (6.)
 constexpr std::size_t kZoneWalk = 16;         // segments a joint zone may reach back over
+constexpr double kMinAlphaMm = 1e-5;          // 11.: the sample before a centred crossing, before j
 
 // The largest step x from which the tool can still stop exactly at distance d with steps that
 // shrink by at most a per cycle: x + (x − a) + (x − 2a) + … (positive terms, the last one ≤ a
@@ -1597,40 +1598,48 @@ double AccelLimitedAccDec::after_corner() {
   return hi;
 }
 
-double AccelLimitedAccDec::centred_step(std::size_t g, const Segment& a, const Segment& b, double u,
-                                        double free) const {
+bool AccelLimitedAccDec::centre_setup(std::size_t g, const Segment& a, const Segment& b,
+                                      Centre& ct) const {
   const Cap& cap = caps_[g];
-  const double vg = cap.v, j = b.s0_mm;
-  const AxisVec e = a.end_direction(), sd = b.start_direction();
+  ct.vg = cap.v;
+  ct.j = b.s0_mm;
+  ct.c_mm = cap.c_mm;
+  ct.e = a.end_direction();
+  ct.sd = b.start_direction();
   for (std::size_t i = 3; i < kMaxAxes; ++i) {
-    if (e[i] != 0 || sd[i] != 0) return u;
+    if (ct.e[i] != 0 || ct.sd[i] != 0) return false;
   }
-  const Vec3 ex = e.xyz(), sx = sd.xyz();
-  const double c = ex.x * sx.x + ex.y * sx.y + ex.z * sx.z;
+  const Vec3 ex = ct.e.xyz(), sx = ct.sd.xyz();
+  ct.c = ex.x * sx.x + ex.y * sx.y + ex.z * sx.z;
   // Not at folds: there the checker may read the sample before j as lying after it (9.).
-  if (c < -0.5) return u;
-  // The next cycle's step u1 is ≤ Vg (the cap is active from c = j − Vg on, and the sample
-  // lands in [c, j)) and ≥ u0 − r_hi·A0: every bound but this cap's allowed u0 here, so it
-  // allows u0 − (mean r over the step)·A0 there (3. (ii); the stop's bounds with a_stop ≤ the
+  if (ct.c < -0.5) return false;
+  // The cycle after the step u0 takes u1 ≤ Vg (the cap is active from c = j − Vg on, and the
+  // sample lands in [c, j)) and ≥ u0 − r_hi·A0: every bound but this cap's allowed u0 here, so
+  // it allows u0 − (mean r over the step)·A0 there (3. (ii); the stop's bounds with a_stop ≤ the
   // r there), and a hold or an override decrease slows by r·A0. r_hi: the highest r over
   // [tool, j] (a's, or its tail zone's when the tool is inside it).
   const std::size_t sa = buf_.slot(cur_);
-  double r_hi = ratio_[sa];
-  if (pos_mm_ - a.s0_mm >= a.length_mm - tail_mm_[sa]) r_hi = std::min(r_hi, tail_r_[sa]);
+  ct.r_hi = ratio_[sa];
+  if (pos_mm_ - a.s0_mm >= a.length_mm - tail_mm_[sa]) ct.r_hi = std::min(ct.r_hi, tail_r_[sa]);
+  return true;
+}
+
+bool AccelLimitedAccDec::centred_ok(const Centre& ct, double from_mm, double u0) const {
   constexpr double kMargin = 1 - 1e-6;
   const double amax = kMargin * a0_;
+  const double vg = ct.vg, c = ct.c;
   // The sample α before j between the step u0 (along E) and u1: the chords d0 = u0·E and
   // d1 = u1·E (u1 ≤ α) or α·E + β·S (β = u1 − α). Per axis |(α − u0)·E_i + β·S_i| ≤ a_i,
   // tangential |u1 − u0| ≤ A0 (path speeds), normal a_n² = 2·u0·(|d1| − α − β·c) ≤ A0² (as in
   // after_corner(), increasing in β), resultant |d1 − d0|² ≤ A0². Each is convex in u1 on
   // u1 ≤ α and on u1 ≥ α, so the ends of both pieces decide.
-  auto sample_ok = [&](double u0, double alpha, double u1) {
+  auto sample_ok = [&](double alpha, double u1) {
     // (u0 − r·A0 at the low end: the deceleration every braking plan uses.)
     if (u1 - u0 > amax || u0 - u1 > a0_) return false;
     const double al = std::min(alpha, u1), beta = std::max(0.0, u1 - alpha);
     for (std::size_t i = 0; i < 3; ++i) {
       if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
-      if (std::abs((al - u0) * e[i] + beta * sd[i]) > kMargin * lim_.axis_amax_pc2[i]) {
+      if (std::abs((al - u0) * ct.e[i] + beta * ct.sd[i]) > kMargin * lim_.axis_amax_pc2[i]) {
         return false;
       }
     }
@@ -1643,28 +1652,57 @@ double AccelLimitedAccDec::centred_step(std::size_t g, const Segment& a, const S
     }
     return true;
   };
-  auto feasible = [&](double u0) {
-    const double p1 = pos_mm_ + u0;
-    const double alpha = j - p1;
-    if (!(alpha > 0) || p1 < cap.c_mm || u0 - vg > amax) return false;
-    const double lo = std::max(0.0, std::min(vg, u0 - r_hi * a0_));
-    if (!sample_ok(u0, alpha, vg) || !sample_ok(u0, alpha, lo)) return false;
-    return !(alpha > lo && alpha < vg) || sample_ok(u0, alpha, alpha);
-  };
-  double hi = std::min({free, vg + amax, j - pos_mm_});
+  const double p1 = from_mm + u0;
+  const double alpha = ct.j - p1;
+  // (Not within 10 nm of j: the checker takes a sample that close as reaching the joint.)
+  if (!(alpha >= kMinAlphaMm) || p1 < ct.c_mm || u0 - vg > amax) return false;
+  const double lo = std::max(0.0, std::min(vg, u0 - ct.r_hi * a0_));
+  if (!sample_ok(alpha, vg) || !sample_ok(alpha, lo)) return false;
+  return !(alpha > lo && alpha < vg) || sample_ok(alpha, alpha);
+}
+
+double AccelLimitedAccDec::centred_step(const Centre& ct, double u, double hi) const {
   if (!(hi > u)) return u;
-  if (feasible(hi)) return hi;
+  if (centred_ok(ct, pos_mm_, hi)) return hi;
   // The largest feasible step by bisection (each answer is checked itself).
   double lo = u, best = u;
   for (int it = 0; it < 8; ++it) {
     const double mid = 0.5 * (lo + hi);
-    if (feasible(mid)) {
+    if (centred_ok(ct, pos_mm_, mid)) {
       best = mid;
       lo = mid;
     } else {
       hi = mid;
     }
   }
+  return best;
+}
+
+double AccelLimitedAccDec::committing_step(const Centre& ct, double u, double hi,
+                                           double& lo_next) const {
+  // The step u_{-1} to p0 may exceed the cap's braking bound when from p0 the centred step
+  // lo_next = u_{-1} − r_hi·A0 (the slowest the cycle at p0 can be made to go) is feasible.
+  auto ok = [&](double x) {
+    const double l = x - ct.r_hi * a0_;
+    return l > 0 && ct.j - (pos_mm_ + x) > ct.vg && centred_ok(ct, pos_mm_ + x, l);
+  };
+  if (!(hi > u)) return u;
+  double best = u;
+  if (ok(hi)) {
+    best = hi;
+  } else {
+    double lo = u;
+    for (int it = 0; it < 8; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      if (ok(mid)) {
+        best = mid;
+        lo = mid;
+      } else {
+        hi = mid;
+      }
+    }
+  }
+  if (best > u) lo_next = best - ct.r_hi * a0_;
   return best;
 }
 
@@ -1896,37 +1934,57 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
 
   // 11. A capped corner between two lines just ahead, the step before its crossing: that step
   // may exceed the cap's braking bound when its sample keeps every limit for each crossing step
-  // the next cycle may take. A bounded few evaluations, only in the one or two cycles before
-  // such a corner.
-  if (lag_ == 0 && !jerk_on_ && !in.hold && u > 0 && to_stop > 0 && !buf_.empty() &&
-      cur_ >= buf_.begin_index() && cur_ + 1 < buf_.end_index()) {
+  // the next cycle may take; and the step before it too, when from there such a step remains
+  // however the next cycle is slowed (committed: that cycle then takes one). A bounded few
+  // evaluations, only in the two or three cycles before such a corner.
+  const Commit commit = commit_;
+  commit_.valid = false;
+  if (lag_ == 0 && !jerk_on_ && (!in.hold || commit.valid) && (u > 0 || commit.valid) &&
+      to_stop > 0 && !buf_.empty() && cur_ >= buf_.begin_index() && cur_ + 1 < buf_.end_index()) {
     const Segment& sa = buf_[cur_];
     const Segment& sb = buf_[cur_ + 1];
     const std::size_t cp = 3 * buf_.slot(cur_ + 1) + 2;
     const double j = sa.end_mm();
+    Centre ct;
     if (sa.kind == ItemKind::kMotion && sb.kind == ItemKind::kMotion && !sa.arc && !sb.arc &&
-        sb.s0_mm == j && pos_mm_ - step_ >= sa.s0_mm && pos_mm_ + u < j && owner_[cp] != kNone) {
+        sb.s0_mm == j && pos_mm_ - step_ >= sa.s0_mm && pos_mm_ + u < j && owner_[cp] != kNone &&
+        !caps_[owner_[cp]].feed && j - pos_mm_ > caps_[owner_[cp]].v &&
+        j - pos_mm_ < 3 * caps_[owner_[cp]].v + 3 * a0_ &&
+        std::abs(caps_[owner_[cp]].c_mm + caps_[owner_[cp]].v - j) <=
+            1e-9 * std::max(1.0, std::abs(j)) &&
+        sb.length_mm >= 2 * (caps_[owner_[cp]].v + a0_) && centre_setup(owner_[cp], sa, sb, ct)) {
       const std::size_t g = owner_[cp];
       const Cap& cap = caps_[g];
-      const double vg = cap.v;
-      if (!cap.feed && j - pos_mm_ > vg && j - pos_mm_ < 2 * vg + a0_ &&
-          std::abs(cap.c_mm + vg - j) <= 1e-9 * std::max(1.0, std::abs(j)) &&
-          sb.length_mm >= 2 * (vg + a0_)) {
-        // The cycle's bound with this joint's cap left out (its key or its active leaf).
-        const bool active = state_[g] == State::kActive;
-        MinTree& t = active ? active_geo_ : (cap.lattice ? key_lattice_ : key_geo_);
-        const double saved = t.at(g);
-        t.set(g, MinTree::kEmpty);
-        double free = std::min({step_ + rise, feed, active_geo_.min(), to_stop, after});
-        if (const double k = key_geo_.min(); k != kInf) free = std::min(free, brake(k, sigma_p));
-        if (const double k = key_lattice_.min(); k != kInf) {
-          free = std::min(free, lattice(k, sigma_p));
-        }
-        t.set(g, saved);
-        if (free > u) {
-          const double as = std::min(a, r_span(pos_mm_, std::nextafter(in.stop_mm, pos_mm_)) * a0_);
-          free = std::min(free, stop_bound(as));
-          if (free > u) u = centred_step(g, sa, sb, u, free);
+      // The cycle's bound with this joint's cap left out (its key or its active leaf).
+      const bool active = state_[g] == State::kActive;
+      MinTree& t = active ? active_geo_ : (cap.lattice ? key_lattice_ : key_geo_);
+      const double saved = t.at(g);
+      t.set(g, MinTree::kEmpty);
+      const double first = in.hold ? step_ - a : step_ + rise;
+      double free = std::min({first, feed, active_geo_.min(), to_stop, after});
+      if (const double k = key_geo_.min(); k != kInf) free = std::min(free, brake(k, sigma_p));
+      if (const double k = key_lattice_.min(); k != kInf) {
+        free = std::min(free, lattice(k, sigma_p));
+      }
+      t.set(g, saved);
+      const bool committed = commit.valid && commit.j_mm == j && commit.from_mm == pos_mm_;
+      if (free > u || committed) {
+        const double as = std::min(a, r_span(pos_mm_, std::nextafter(in.stop_mm, pos_mm_)) * a0_);
+        free = std::min(free, stop_bound(as));
+        const double one_step = std::min({free, ct.vg + (1 - 1e-6) * a0_, j - pos_mm_});
+        if (committed) {
+          // Every bound but the cap's allows at least commit.lo here (3. (ii)), and the centred
+          // step commit.lo was found feasible from here: the largest feasible one up to them.
+          const double lo = std::min(commit.lo, free);
+          u = in.hold ? (centred_ok(ct, pos_mm_, free) ? free : lo)
+                      : centred_step(ct, lo, one_step);
+        } else if (free > u && j - pos_mm_ < 2 * ct.vg + a0_) {
+          u = centred_step(ct, u, one_step);
+        } else if (free > u && !in.hold) {
+          double lo_next = 0;
+          const double before = u;
+          u = committing_step(ct, u, std::min(free, j - pos_mm_ - ct.vg), lo_next);
+          if (u > before) commit_ = {true, j, pos_mm_ + u, lo_next};
         }
       }
     }
