@@ -283,6 +283,7 @@ constexpr double kZoneFloor = 0.25;
 constexpr std::size_t kReleasePerCycle = 32;  // pending caps a cycle inserts (6.)
 constexpr std::size_t kZoneWalk = 16;         // segments a joint zone may reach back over
 constexpr double kMinAlphaMm = 1e-5;          // 11.: the sample before a centred crossing, before j
+constexpr int kCentreSearch = 6;              // 11.: bisection steps of a centred step search
 
 // The largest step x from which the tool can still stop exactly at distance d with steps that
 // shrink by at most a per cycle: x + (x − a) + (x − 2a) + … (positive terms, the last one ≤ a
@@ -1661,12 +1662,30 @@ bool AccelLimitedAccDec::centred_ok(const Centre& ct, double from_mm, double u0)
   return !(alpha > lo && alpha < vg) || sample_ok(alpha, alpha);
 }
 
+double AccelLimitedAccDec::centred_top(const Centre& ct, double k_e, double k_s, double m_e,
+                                       double m_s) const {
+  // Per axis |k·x + m| ≤ a_i with k = k_e·E_i + k_s·S_i, m = m_e·E_i + m_s·S_i: the largest x.
+  double top = kInf;
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
+    const double k = k_e * ct.e[i] + k_s * ct.sd[i], m = m_e * ct.e[i] + m_s * ct.sd[i];
+    const double ai = (1 - 1e-6) * lim_.axis_amax_pc2[i];
+    if (k > 1e-12) top = std::min(top, (ai - m) / k);
+    if (k < -1e-12) top = std::min(top, (-ai - m) / k);
+  }
+  return top;
+}
+
 double AccelLimitedAccDec::centred_step(const Centre& ct, double u, double hi) const {
+  // Every feasible step meets the per-axis limits with the crossing u1 = Vg, linear in u0:
+  // (α − u0)·E + (Vg − α)·S with α = D − u0 (D = j − tool). Their largest u0 first.
+  const double d = ct.j - pos_mm_;
+  hi = std::min(hi, centred_top(ct, -2, 1, d, ct.vg - d));
   if (!(hi > u)) return u;
   if (centred_ok(ct, pos_mm_, hi)) return hi;
   // The largest feasible step by bisection (each answer is checked itself).
   double lo = u, best = u;
-  for (int it = 0; it < 8; ++it) {
+  for (int it = 0; it < kCentreSearch; ++it) {
     const double mid = 0.5 * (lo + hi);
     if (centred_ok(ct, pos_mm_, mid)) {
       best = mid;
@@ -1686,13 +1705,17 @@ double AccelLimitedAccDec::committing_step(const Centre& ct, double u, double hi
     const double l = x - ct.r_hi * a0_;
     return l > 0 && ct.j - (pos_mm_ + x) > ct.vg && centred_ok(ct, pos_mm_ + x, l);
   };
+  // The same per-axis limits from p0 = tool + x with u0 = x − r_hi·A0: α − u0 = D + 2·r_hi·A0
+  // − 3x, Vg − α = Vg − D − r_hi·A0 + 2x.
+  const double d = ct.j - pos_mm_, ra = ct.r_hi * a0_;
+  hi = std::min(hi, centred_top(ct, -3, 2, d + 2 * ra, ct.vg - d - ra));
   if (!(hi > u)) return u;
   double best = u;
   if (ok(hi)) {
     best = hi;
   } else {
     double lo = u;
-    for (int it = 0; it < 8; ++it) {
+    for (int it = 0; it < kCentreSearch; ++it) {
       const double mid = 0.5 * (lo + hi);
       if (ok(mid)) {
         best = mid;
@@ -1939,52 +1962,72 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   // evaluations, only in the two or three cycles before such a corner.
   const Commit commit = commit_;
   commit_.valid = false;
-  if (lag_ == 0 && !jerk_on_ && (!in.hold || commit.valid) && (u > 0 || commit.valid) &&
-      to_stop > 0 && !buf_.empty() && cur_ >= buf_.begin_index() && cur_ + 1 < buf_.end_index()) {
+  // (Gated on the compact cap arrays first: the segments are loaded only near such a corner.)
+  const std::size_t cp = cur_ + 1 < buf_.end_index() ? 3 * buf_.slot(cur_ + 1) + 2 : std::size_t{0};
+  const std::uint32_t cg = cur_ + 1 < buf_.end_index() ? owner_[cp] : kNone;
+  if (cg != kNone && lag_ == 0 && !jerk_on_ && (!in.hold || commit.valid) &&
+      (u > 0 || commit.valid) && to_stop > 0 && cur_ >= buf_.begin_index() && !caps_[cg].feed &&
+      pos_mm_ + caps_[cg].v < caps_[cg].c_mm + caps_[cg].v &&
+      caps_[cg].c_mm + caps_[cg].v - pos_mm_ < 3 * caps_[cg].v + 3 * a0_) {
     const Segment& sa = buf_[cur_];
     const Segment& sb = buf_[cur_ + 1];
-    const std::size_t cp = 3 * buf_.slot(cur_ + 1) + 2;
     const double j = sa.end_mm();
+    const Cap& cap = caps_[cg];
     Centre ct;
     if (sa.kind == ItemKind::kMotion && sb.kind == ItemKind::kMotion && !sa.arc && !sb.arc &&
-        sb.s0_mm == j && pos_mm_ - step_ >= sa.s0_mm && pos_mm_ + u < j && owner_[cp] != kNone &&
-        !caps_[owner_[cp]].feed && j - pos_mm_ > caps_[owner_[cp]].v &&
-        j - pos_mm_ < 3 * caps_[owner_[cp]].v + 3 * a0_ &&
-        std::abs(caps_[owner_[cp]].c_mm + caps_[owner_[cp]].v - j) <=
-            1e-9 * std::max(1.0, std::abs(j)) &&
-        sb.length_mm >= 2 * (caps_[owner_[cp]].v + a0_) && centre_setup(owner_[cp], sa, sb, ct)) {
-      const std::size_t g = owner_[cp];
-      const Cap& cap = caps_[g];
-      // The cycle's bound with this joint's cap left out (its key or its active leaf).
-      const bool active = state_[g] == State::kActive;
-      MinTree& t = active ? active_geo_ : (cap.lattice ? key_lattice_ : key_geo_);
-      const double saved = t.at(g);
-      t.set(g, MinTree::kEmpty);
+        sb.s0_mm == j && pos_mm_ - step_ >= sa.s0_mm && pos_mm_ + u < j &&
+        std::abs(cap.c_mm + cap.v - j) <= 1e-9 * std::max(1.0, std::abs(j)) &&
+        sb.length_mm >= 2 * (cap.v + a0_) && centre_setup(cg, sa, sb, ct)) {
       const double first = in.hold ? step_ - a : step_ + rise;
-      double free = std::min({first, feed, active_geo_.min(), to_stop, after});
-      if (const double k = key_geo_.min(); k != kInf) free = std::min(free, brake(k, sigma_p));
-      if (const double k = key_lattice_.min(); k != kInf) {
-        free = std::min(free, lattice(k, sigma_p));
-      }
-      t.set(g, saved);
-      const bool committed = commit.valid && commit.j_mm == j && commit.from_mm == pos_mm_;
-      if (free > u || committed) {
+      // The cycle's bound with this joint's cap left out (its key or its active leaf: two tree
+      // updates), the stop's bounds included; above `want` it may answer min(bound, want).
+      auto free_bound = [&](double want) {
+        const bool active = state_[cg] == State::kActive;
+        MinTree& t = active ? active_geo_ : (cap.lattice ? key_lattice_ : key_geo_);
+        const double saved = t.at(cg);
+        t.set(cg, MinTree::kEmpty);
+        double f = std::min({first, feed, active_geo_.min(), to_stop, after});
+        if (const double k = key_geo_.min(); k != kInf) f = std::min(f, brake(k, sigma_p));
+        if (const double k = key_lattice_.min(); k != kInf) f = std::min(f, lattice(k, sigma_p));
+        t.set(cg, saved);
+        // The stop's bounds are ≥ x where far (the same tests as above, with x for u).
+        const double x = std::min(f, want);
+        const double a_lo = std::min(a, r_zone_.min() * a0_);
+        const bool far = to_stop >= 2 * vt &&
+                         a0_ * a0_ / 4 + 2 * a0_ * d_sigma >= above(x + a0_ / 2) &&
+                         2 * a_lo * to_stop >= above(x + a_lo / 2) &&
+                         a_lo * a_lo + vt * vt + 2 * a_lo * (to_stop - vt) >= above(x + a_lo);
+        if (far) return x;
         const double as = std::min(a, r_span(pos_mm_, std::nextafter(in.stop_mm, pos_mm_)) * a0_);
-        free = std::min(free, stop_bound(as));
-        const double one_step = std::min({free, ct.vg + (1 - 1e-6) * a0_, j - pos_mm_});
-        if (committed) {
-          // Every bound but the cap's allows at least commit.lo here (3. (ii)), and the centred
-          // step commit.lo was found feasible from here: the largest feasible one up to them.
-          const double lo = std::min(commit.lo, free);
-          u = in.hold ? (centred_ok(ct, pos_mm_, free) ? free : lo)
-                      : centred_step(ct, lo, one_step);
-        } else if (free > u && j - pos_mm_ < 2 * ct.vg + a0_) {
-          u = centred_step(ct, u, one_step);
-        } else if (free > u && !in.hold) {
-          double lo_next = 0;
-          const double before = u;
-          u = committing_step(ct, u, std::min(free, j - pos_mm_ - ct.vg), lo_next);
-          if (u > before) commit_ = {true, j, pos_mm_ + u, lo_next};
+        return std::min(f, stop_bound(as));
+      };
+      // What the step can be at most without that minimum (the search runs first, the minimum
+      // only where the search found a step).
+      const double pre = std::min({first, feed, to_stop, after});
+      const double d0 = j - pos_mm_;
+      const double top = ct.vg + (1 - 1e-6) * a0_;
+      if (commit.valid && commit.j_mm == j && commit.from_mm == pos_mm_) {
+        // Every bound but the cap's allows at least commit.lo here (3. (ii)), and the centred
+        // step commit.lo was found feasible from here: the largest feasible one up to them.
+        const double free = free_bound(std::min(top, d0));
+        const double lo = std::min(commit.lo, free);
+        u = in.hold ? (centred_ok(ct, pos_mm_, free) ? free : lo)
+                    : centred_step(ct, lo, std::min({free, top, d0}));
+      } else if (!in.hold && d0 < 2 * ct.vg + a0_) {
+        double x = centred_step(ct, u, std::min({pre, top, d0}));
+        if (x > u) {
+          const double free = free_bound(x);
+          if (x > free) x = centred_step(ct, u, std::min({free, top, d0}));
+          u = x;
+        }
+      } else if (!in.hold) {
+        double lo_next = 0;
+        double x = committing_step(ct, u, std::min(pre, d0 - ct.vg), lo_next);
+        if (x > u) {
+          const double free = free_bound(x);
+          if (x > free) x = committing_step(ct, u, std::min(free, d0 - ct.vg), lo_next);
+          if (x > u) commit_ = {true, j, pos_mm_ + x, lo_next};
+          u = x;
         }
       }
     }

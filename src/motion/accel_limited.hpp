@@ -123,6 +123,8 @@ class AccelLimitedAccDec final : public AccDec {
   // The step u0 from from_mm lands in [c, j) and its sample keeps every limit for each crossing
   // step the next cycle may take.
   bool centred_ok(const Centre& ct, double from_mm, double u0) const;
+  // The largest x meeting every per-axis limit |(k_e·E_i + k_s·S_i)·x + m_e·E_i + m_s·S_i| ≤ a_i.
+  double centred_top(const Centre& ct, double k_e, double k_s, double m_e, double m_s) const;
   // The largest feasible step in (u, hi] (u when none).
   double centred_step(const Centre& ct, double u, double hi) const;
   // The largest step in (u, hi] after which the slowest next step is a feasible centred one
