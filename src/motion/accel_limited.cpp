@@ -260,6 +260,36 @@
 //    (3.), so a state above the keys' bounds meets no lower r coming into the step's reach there
 //    (with the reach's r: a short arc before the window's end, 0.63 → 0.19 µm/cycle² at once).
 //
+// 11. Centred corners (between two lines, linear axes, no filter, turns ≤ 120°, b ≥ 2·(Vg + A0)).
+//    The joint cap holds the step that lands within Vg before j to Vg as well, because the
+//    crossing after it may split the turn anyhow (9.). With the step u0 landing α before j and
+//    the crossing u1 = α + β, the sample between them has the second difference
+//    (α − u0)·E + β·S: the turn is shared between this sample and the next (9.) as β : α. So u0
+//    may exceed Vg where that sample keeps every limit for every u1 the next cycle may take:
+//      - u1 ≤ Vg: the sample lands in [c, j) = [j − Vg, j), where the cap is active;
+//      - u1 ≥ u0 − r_hi·A0: every bound but this cap's allowed u0 (the step is ≤ the cycle's
+//        bound with this cap's key or active leaf left out, the stop's bounds included), so
+//        each allows u0 − (mean r over the step)·A0 next (3. (ii)); a hold or an override
+//        decrease slows by r·A0; r_hi the highest r from the tool to j (a's, or its tail zone's).
+//    The limits at the sample: per axis |(α − u0)·E_i + β·S_i| ≤ a_i, tangential |u1 − u0| ≤ A0
+//    (path speeds), the checker's chord normal a_n² = 2·u0·(|d1| − α − β·c) ≤ A0² (c = E·S,
+//    increasing in β), resultant |d1 − d0|² ≤ A0². Each is convex in u1 on u1 ≤ α (no crossing:
+//    a plain speed change) and on u1 ≥ α, so the ends of both pieces decide (centred_ok()). The
+//    sample after the crossing is 9.'s (or, where 9. gives no interval, the cap's Vg as before:
+//    7.'s pair of steps ≤ Vg). The sample stays ≥ 10 nm before j (the checker takes a sample
+//    that close as reaching the joint). The step u0 is the largest feasible one up to that
+//    bound: the per-axis limits with u1 = Vg are linear in u0 (α = j − tool − u0), their
+//    largest u0 first, then a bisection of 6 checks (every answer is checked itself).
+//    One step earlier (the tool ≥ 2·Vg + A0 before j): a step u_{-1} above the cap's bound
+//    (≤ the cycle's bound without it) is taken when from its landing point p0 the slowest next
+//    step, u_{-1} − r_hi·A0, is a feasible centred step (lands in [c, j), limits as above). It is
+//    *committed*: the cycle at p0 takes the largest feasible centred step ≥ that (or the held
+//    step under a hold, if feasible), and every bound but the cap's allows it there by 3. (ii).
+//    The braking lattice of the cap's key lands the tool at c − Vg with Vg + A0; from there the
+//    two steps let it reach the bound's pattern …, V + A0, **V** (centred), V + A0 …
+//    (zigzag_0.002: 20.54 → 18.54 s). Cost: only within 3·Vg + 3·A0 of such a corner, a few
+//    closed forms and two tree updates (the cap's leaf left out and put back).
+//
 // Without a filter the tool position is the commanded position and at rest means step 0.
 #include "motion/accel_limited.hpp"
 
