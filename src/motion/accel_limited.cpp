@@ -260,6 +260,36 @@
 //    (3.), so a state above the keys' bounds meets no lower r coming into the step's reach there
 //    (with the reach's r: a short arc before the window's end, 0.63 → 0.19 µm/cycle² at once).
 //
+// 11. Centred corners (between two lines, linear axes, no filter, turns ≤ 120°, b ≥ 2·(Vg + A0)).
+//    The joint cap holds the step that lands within Vg before j to Vg as well, because the
+//    crossing after it may split the turn anyhow (9.). With the step u0 landing α before j and
+//    the crossing u1 = α + β, the sample between them has the second difference
+//    (α − u0)·E + β·S: the turn is shared between this sample and the next (9.) as β : α. So u0
+//    may exceed Vg where that sample keeps every limit for every u1 the next cycle may take:
+//      - u1 ≤ Vg: the sample lands in [c, j) = [j − Vg, j), where the cap is active;
+//      - u1 ≥ u0 − r_hi·A0: every bound but this cap's allowed u0 (the step is ≤ the cycle's
+//        bound with this cap's key or active leaf left out, the stop's bounds included), so
+//        each allows u0 − (mean r over the step)·A0 next (3. (ii)); a hold or an override
+//        decrease slows by r·A0; r_hi the highest r from the tool to j (a's, or its tail zone's).
+//    The limits at the sample: per axis |(α − u0)·E_i + β·S_i| ≤ a_i, tangential |u1 − u0| ≤ A0
+//    (path speeds), the checker's chord normal a_n² = 2·u0·(|d1| − α − β·c) ≤ A0² (c = E·S,
+//    increasing in β), resultant |d1 − d0|² ≤ A0². Each is convex in u1 on u1 ≤ α (no crossing:
+//    a plain speed change) and on u1 ≥ α, so the ends of both pieces decide (centred_ok()). The
+//    sample after the crossing is 9.'s (or, where 9. gives no interval, the cap's Vg as before:
+//    7.'s pair of steps ≤ Vg). The sample stays ≥ 10 nm before j (the checker takes a sample
+//    that close as reaching the joint). The step u0 is the largest feasible one up to that
+//    bound: the per-axis limits with u1 = Vg are linear in u0 (α = j − tool − u0), their
+//    largest u0 first, then a bisection of 6 checks (every answer is checked itself).
+//    One step earlier (the tool ≥ 2·Vg + A0 before j): a step u_{-1} above the cap's bound
+//    (≤ the cycle's bound without it) is taken when from its landing point p0 the slowest next
+//    step, u_{-1} − r_hi·A0, is a feasible centred step (lands in [c, j), limits as above). It is
+//    *committed*: the cycle at p0 takes the largest feasible centred step ≥ that (or the held
+//    step under a hold, if feasible), and every bound but the cap's allows it there by 3. (ii).
+//    The braking lattice of the cap's key lands the tool at c − Vg with Vg + A0; from there the
+//    two steps let it reach the bound's pattern …, V + A0, **V** (centred), V + A0 …
+//    (zigzag_0.002: 20.54 → 18.54 s). Cost: only within 3·Vg + 3·A0 of such a corner, a few
+//    closed forms and two tree updates (the cap's leaf left out and put back).
+//
 // Without a filter the tool position is the commanded position and at rest means step 0.
 #include "motion/accel_limited.hpp"
 
@@ -282,6 +312,8 @@ constexpr double kRecoverShare = 0.98;  // √(a_t² + a_n²) ≤ 0.98·g slowin
 constexpr double kZoneFloor = 0.25;
 constexpr std::size_t kReleasePerCycle = 32;  // pending caps a cycle inserts (6.)
 constexpr std::size_t kZoneWalk = 16;         // segments a joint zone may reach back over
+constexpr double kMinAlphaMm = 1e-5;          // 11.: the sample before a centred crossing, before j
+constexpr int kCentreSearch = 6;              // 11.: bisection steps of a centred step search
 
 // The largest step x from which the tool can still stop exactly at distance d with steps that
 // shrink by at most a per cycle: x + (x − a) + (x − 2a) + … (positive terms, the last one ≤ a
@@ -1597,6 +1629,136 @@ double AccelLimitedAccDec::after_corner() {
   return hi;
 }
 
+bool AccelLimitedAccDec::centre_setup(std::size_t g, const Segment& a, const Segment& b,
+                                      Centre& ct) const {
+  const Cap& cap = caps_[g];
+  ct.vg = cap.v;
+  ct.j = b.s0_mm;
+  ct.c_mm = cap.c_mm;
+  ct.e = a.end_direction();
+  ct.sd = b.start_direction();
+  for (std::size_t i = 3; i < kMaxAxes; ++i) {
+    if (ct.e[i] != 0 || ct.sd[i] != 0) return false;
+  }
+  const Vec3 ex = ct.e.xyz(), sx = ct.sd.xyz();
+  ct.c = ex.x * sx.x + ex.y * sx.y + ex.z * sx.z;
+  // Not at folds: there the checker may read the sample before j as lying after it (9.).
+  if (ct.c < -0.5) return false;
+  // The cycle after the step u0 takes u1 ≤ Vg (the cap is active from c = j − Vg on, and the
+  // sample lands in [c, j)) and ≥ u0 − r_hi·A0: every bound but this cap's allowed u0 here, so
+  // it allows u0 − (mean r over the step)·A0 there (3. (ii); the stop's bounds with a_stop ≤ the
+  // r there), and a hold or an override decrease slows by r·A0. r_hi: the highest r over
+  // [tool, j] (a's, or its tail zone's when the tool is inside it).
+  const std::size_t sa = buf_.slot(cur_);
+  ct.r_hi = ratio_[sa];
+  if (pos_mm_ - a.s0_mm >= a.length_mm - tail_mm_[sa]) ct.r_hi = std::min(ct.r_hi, tail_r_[sa]);
+  return true;
+}
+
+bool AccelLimitedAccDec::centred_ok(const Centre& ct, double from_mm, double u0) const {
+  constexpr double kMargin = 1 - 1e-6;
+  const double amax = kMargin * a0_;
+  const double vg = ct.vg, c = ct.c;
+  // The sample α before j between the step u0 (along E) and u1: the chords d0 = u0·E and
+  // d1 = u1·E (u1 ≤ α) or α·E + β·S (β = u1 − α). Per axis |(α − u0)·E_i + β·S_i| ≤ a_i,
+  // tangential |u1 − u0| ≤ A0 (path speeds), normal a_n² = 2·u0·(|d1| − α − β·c) ≤ A0² (as in
+  // after_corner(), increasing in β), resultant |d1 − d0|² ≤ A0². Each is convex in u1 on
+  // u1 ≤ α and on u1 ≥ α, so the ends of both pieces decide.
+  auto sample_ok = [&](double alpha, double u1) {
+    // (u0 − r·A0 at the low end: the deceleration every braking plan uses.)
+    if (u1 - u0 > amax || u0 - u1 > a0_) return false;
+    const double al = std::min(alpha, u1), beta = std::max(0.0, u1 - alpha);
+    for (std::size_t i = 0; i < 3; ++i) {
+      if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
+      if (std::abs((al - u0) * ct.e[i] + beta * ct.sd[i]) > kMargin * lim_.axis_amax_pc2[i]) {
+        return false;
+      }
+    }
+    if (beta <= 0) return true;
+    const double d1 = std::sqrt(std::max(0.0, al * al + beta * beta + 2 * al * beta * c));
+    if (2 * u0 * (d1 - al - beta * c) > amax * amax) return false;
+    if (lim_.bound_resultant) {
+      const double w = al - u0;
+      if (w * w + beta * beta + 2 * w * beta * c > amax * amax) return false;
+    }
+    return true;
+  };
+  const double p1 = from_mm + u0;
+  const double alpha = ct.j - p1;
+  // (Not within 10 nm of j: the checker takes a sample that close as reaching the joint.)
+  if (!(alpha >= kMinAlphaMm) || p1 < ct.c_mm || u0 - vg > amax) return false;
+  const double lo = std::max(0.0, std::min(vg, u0 - ct.r_hi * a0_));
+  if (!sample_ok(alpha, vg) || !sample_ok(alpha, lo)) return false;
+  return !(alpha > lo && alpha < vg) || sample_ok(alpha, alpha);
+}
+
+double AccelLimitedAccDec::centred_top(const Centre& ct, double k_e, double k_s, double m_e,
+                                       double m_s) const {
+  // Per axis |k·x + m| ≤ a_i with k = k_e·E_i + k_s·S_i, m = m_e·E_i + m_s·S_i: the largest x.
+  double top = kInf;
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
+    const double k = k_e * ct.e[i] + k_s * ct.sd[i], m = m_e * ct.e[i] + m_s * ct.sd[i];
+    const double ai = (1 - 1e-6) * lim_.axis_amax_pc2[i];
+    if (k > 1e-12) top = std::min(top, (ai - m) / k);
+    if (k < -1e-12) top = std::min(top, (-ai - m) / k);
+  }
+  return top;
+}
+
+double AccelLimitedAccDec::centred_step(const Centre& ct, double u, double hi) const {
+  // Every feasible step meets the per-axis limits with the crossing u1 = Vg, linear in u0:
+  // (α − u0)·E + (Vg − α)·S with α = D − u0 (D = j − tool). Their largest u0 first.
+  const double d = ct.j - pos_mm_;
+  hi = std::min(hi, centred_top(ct, -2, 1, d, ct.vg - d));
+  if (!(hi > u)) return u;
+  if (centred_ok(ct, pos_mm_, hi)) return hi;
+  // The largest feasible step by bisection (each answer is checked itself).
+  double lo = u, best = u;
+  for (int it = 0; it < kCentreSearch; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    if (centred_ok(ct, pos_mm_, mid)) {
+      best = mid;
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  return best;
+}
+
+double AccelLimitedAccDec::committing_step(const Centre& ct, double u, double hi,
+                                           double& lo_next) const {
+  // The step u_{-1} to p0 may exceed the cap's braking bound when from p0 the centred step
+  // lo_next = u_{-1} − r_hi·A0 (the slowest the cycle at p0 can be made to go) is feasible.
+  auto ok = [&](double x) {
+    const double l = x - ct.r_hi * a0_;
+    return l > 0 && ct.j - (pos_mm_ + x) > ct.vg && centred_ok(ct, pos_mm_ + x, l);
+  };
+  // The same per-axis limits from p0 = tool + x with u0 = x − r_hi·A0: α − u0 = D + 2·r_hi·A0
+  // − 3x, Vg − α = Vg − D − r_hi·A0 + 2x.
+  const double d = ct.j - pos_mm_, ra = ct.r_hi * a0_;
+  hi = std::min(hi, centred_top(ct, -3, 2, d + 2 * ra, ct.vg - d - ra));
+  if (!(hi > u)) return u;
+  double best = u;
+  if (ok(hi)) {
+    best = hi;
+  } else {
+    double lo = u;
+    for (int it = 0; it < kCentreSearch; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      if (ok(mid)) {
+        best = mid;
+        lo = mid;
+      } else {
+        hi = mid;
+      }
+    }
+  }
+  if (best > u) lo_next = best - ct.r_hi * a0_;
+  return best;
+}
+
 void AccelLimitedAccDec::step(const CycleInput& in) {
   advance_current();
   if (!held_cycle_) {
@@ -1805,10 +1967,10 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     }
   }
   if (!stop_far) stop_far = lattice_far && landing_far(a_stop);
-  if (!stop_far) {
+  auto stop_bound = [&](double as) {
     double stop_limit = std::sqrt(a0_ * a0_ / 4 + 2 * a0_ * d_sigma) - a0_ / 2;
-    stop_limit = std::max(stop_limit, std::min(to_stop, a_stop));
-    stop_limit = std::min(stop_limit, landing_step(to_stop, a_stop));
+    stop_limit = std::max(stop_limit, std::min(to_stop, as));
+    stop_limit = std::min(stop_limit, landing_step(to_stop, as));
     // The last V_t = min(A0, a_i)/2 before a stop (the lowest corner cap, a reversal) is run at
     // ≤ V_t: a joint cap that arrives late at a stop's position (the window's tail) then finds
     // the steps around it already within its cap (see 6.).
@@ -1816,12 +1978,89 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
       // In real distance with the local acceleration a (the cap lies within a few steps of the
       // stop; farther away the stop's own σ bound is the stricter one).
       const double tail =
-          to_stop <= vt
-              ? vt
-              : std::sqrt(a_stop * a_stop + vt * vt + 2 * a_stop * (to_stop - vt)) - a_stop;
+          to_stop <= vt ? vt : std::sqrt(as * as + vt * vt + 2 * as * (to_stop - vt)) - as;
       stop_limit = std::min(stop_limit, tail);
     }
-    u = std::min(u, stop_limit);
+    return stop_limit;
+  };
+  if (!stop_far) u = std::min(u, stop_bound(a_stop));
+
+  // 11. A capped corner between two lines just ahead, the step before its crossing: that step
+  // may exceed the cap's braking bound when its sample keeps every limit for each crossing step
+  // the next cycle may take; and the step before it too, when from there such a step remains
+  // however the next cycle is slowed (committed: that cycle then takes one). A bounded few
+  // evaluations, only in the two or three cycles before such a corner.
+  const Commit commit = commit_;
+  commit_.valid = false;
+  // (Gated on the compact cap arrays first: the segments are loaded only near such a corner.)
+  const std::size_t cp = cur_ + 1 < buf_.end_index() ? 3 * buf_.slot(cur_ + 1) + 2 : std::size_t{0};
+  const std::uint32_t cg = cur_ + 1 < buf_.end_index() ? owner_[cp] : kNone;
+  if (cg != kNone && lag_ == 0 && !jerk_on_ && (!in.hold || commit.valid) &&
+      (u > 0 || commit.valid) && to_stop > 0 && cur_ >= buf_.begin_index() && !caps_[cg].feed &&
+      pos_mm_ + caps_[cg].v < caps_[cg].c_mm + caps_[cg].v &&
+      caps_[cg].c_mm + caps_[cg].v - pos_mm_ < 3 * caps_[cg].v + 3 * a0_) {
+    const Segment& sa = buf_[cur_];
+    const Segment& sb = buf_[cur_ + 1];
+    const double j = sa.end_mm();
+    const Cap& cap = caps_[cg];
+    Centre ct;
+    if (sa.kind == ItemKind::kMotion && sb.kind == ItemKind::kMotion && !sa.arc && !sb.arc &&
+        sb.s0_mm == j && pos_mm_ - step_ >= sa.s0_mm && pos_mm_ + u < j &&
+        std::abs(cap.c_mm + cap.v - j) <= 1e-9 * std::max(1.0, std::abs(j)) &&
+        sb.length_mm >= 2 * (cap.v + a0_) && centre_setup(cg, sa, sb, ct)) {
+      const double first = in.hold ? step_ - a : step_ + rise;
+      // The cycle's bound with this joint's cap left out (its key or its active leaf: two tree
+      // updates), the stop's bounds included; above `want` it may answer min(bound, want).
+      auto free_bound = [&](double want) {
+        const bool active = state_[cg] == State::kActive;
+        MinTree& t = active ? active_geo_ : (cap.lattice ? key_lattice_ : key_geo_);
+        const double saved = t.at(cg);
+        t.set(cg, MinTree::kEmpty);
+        double f = std::min({first, feed, active_geo_.min(), to_stop, after});
+        if (const double k = key_geo_.min(); k != kInf) f = std::min(f, brake(k, sigma_p));
+        if (const double k = key_lattice_.min(); k != kInf) f = std::min(f, lattice(k, sigma_p));
+        t.set(cg, saved);
+        // The stop's bounds are ≥ x where far (the same tests as above, with x for u).
+        const double x = std::min(f, want);
+        const double a_lo = std::min(a, r_zone_.min() * a0_);
+        const bool far = to_stop >= 2 * vt &&
+                         a0_ * a0_ / 4 + 2 * a0_ * d_sigma >= above(x + a0_ / 2) &&
+                         2 * a_lo * to_stop >= above(x + a_lo / 2) &&
+                         a_lo * a_lo + vt * vt + 2 * a_lo * (to_stop - vt) >= above(x + a_lo);
+        if (far) return x;
+        const double as = std::min(a, r_span(pos_mm_, std::nextafter(in.stop_mm, pos_mm_)) * a0_);
+        return std::min(f, stop_bound(as));
+      };
+      // What the step can be at most without that minimum (the search runs first, the minimum
+      // only where the search found a step).
+      const double pre = std::min({first, feed, to_stop, after});
+      const double d0 = j - pos_mm_;
+      const double top = ct.vg + (1 - 1e-6) * a0_;
+      if (commit.valid && commit.j_mm == j && commit.from_mm == pos_mm_) {
+        // Every bound but the cap's allows at least commit.lo here (3. (ii)), and the centred
+        // step commit.lo was found feasible from here: the largest feasible one up to them.
+        const double free = free_bound(std::min(top, d0));
+        const double lo = std::min(commit.lo, free);
+        u = in.hold ? (centred_ok(ct, pos_mm_, free) ? free : lo)
+                    : centred_step(ct, lo, std::min({free, top, d0}));
+      } else if (!in.hold && d0 < 2 * ct.vg + a0_) {
+        double x = centred_step(ct, u, std::min({pre, top, d0}));
+        if (x > u) {
+          const double free = free_bound(x);
+          if (x > free) x = centred_step(ct, u, std::min({free, top, d0}));
+          u = x;
+        }
+      } else if (!in.hold) {
+        double lo_next = 0;
+        double x = committing_step(ct, u, std::min(pre, d0 - ct.vg), lo_next);
+        if (x > u) {
+          const double free = free_bound(x);
+          if (x > free) x = committing_step(ct, u, std::min(free, d0 - ct.vg), lo_next);
+          if (x > u) commit_ = {true, j, pos_mm_ + x, lo_next};
+          u = x;
+        }
+      }
+    }
   }
   u = std::max(0.0, u);
   if (u <= feed_limit) feed_recover_ = false;

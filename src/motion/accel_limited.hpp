@@ -112,6 +112,29 @@ class AccelLimitedAccDec final : public AccDec {
   // this cycle's step from the second difference around the crossing (kInf: none; the joint cap
   // then stays). Clears the joint cap when it returns a limit.
   double after_corner();
+  // 11. Centred corners: the joint (j, Vg, the cap's c), the directions and their cosine, and
+  // the highest r from the tool up to j.
+  struct Centre {
+    double vg = 0, j = 0, c_mm = 0, c = 0, r_hi = 1;
+    AxisVec e, sd;
+  };
+  bool centre_setup(std::size_t g, const planner::Segment& a, const planner::Segment& b,
+                    Centre& ct) const;
+  // The step u0 from from_mm lands in [c, j) and its sample keeps every limit for each crossing
+  // step the next cycle may take.
+  bool centred_ok(const Centre& ct, double from_mm, double u0) const;
+  // The largest x meeting every per-axis limit |(k_e·E_i + k_s·S_i)·x + m_e·E_i + m_s·S_i| ≤ a_i.
+  double centred_top(const Centre& ct, double k_e, double k_s, double m_e, double m_s) const;
+  // The largest feasible step in (u, hi] (u when none).
+  double centred_step(const Centre& ct, double u, double hi) const;
+  // The largest step in (u, hi] after which the slowest next step is a feasible centred one
+  // (lo_next); u when none.
+  double committing_step(const Centre& ct, double u, double hi, double& lo_next) const;
+  // A committing step was taken: the next cycle (from from_mm) takes a centred step ≥ lo.
+  struct Commit {
+    bool valid = false;
+    double j_mm = 0, from_mm = 0, lo = 0;
+  } commit_;
   // Lowers r over the first `mm` of the segment in `slot` to at most `r` (head zone).
   void add_head(std::size_t slot, double mm, double r);
   // A head zone that reaches past the segment it starts in (8.): r ≤ `r` up to path position

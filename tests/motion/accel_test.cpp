@@ -724,5 +724,51 @@ RC_GTEST_PROP(AccelLimited, RandomProgramsWithCoupledAxesAndLines, ()) {
   random_program_with_coupled_axes(false);
 }
 
+// Centred corners (accel_limited.cpp 11.): the zig-zag of zigzag_0.002_0.0005.ngc (53° corners
+// every 0.0568 mm, Vg = 2.24 µm per cycle, A0 = 2 µm per cycle², every axis at Amax). The step
+// before the crossing and the one before it may exceed the cap's braking bound; the next cycle
+// then must take a centred step whatever it is told. So a feed hold and an override drop to
+// 30 % start at each cycle of one corner's approach; every run keeps P1–P4.
+Prog centred_zigzag(int corners) {
+  Prog p;
+  for (int i = 1; i <= corners + 1; ++i) {
+    p.line_to(Vec3{0.0508 * i, i % 2 ? -0.0127 : 0.0127, 0}, 9999 * 25.4);
+  }
+  return p;
+}
+
+MachineConfig centred_machine() {
+  MachineConfig m = test_machine();
+  for (std::size_t i = 0; i < 3; ++i) m.axes[i].max_accel_mm_s2 = m.max_accel_mm_s2;
+  return m;
+}
+
+TEST(AccelLimited, CentredCornersPassAZigZagFaster) {
+  const MachineConfig m = centred_machine();
+  const RunResult r = run_checked(m, centred_zigzag(40));
+  // 41 segments: 0.412 s with the cap held before the crossing (before 11.), 0.373 s centred
+  // (the bound's pattern … V + A0, V, V + A0 … at each corner).
+  EXPECT_LE(r.time_s(), 0.380);
+}
+
+TEST(AccelLimited, CentredCornersUnderAHoldOrAnOverrideDropAtEveryCycle) {
+  const MachineConfig m = centred_machine();
+  const Prog p = centred_zigzag(6);
+  // The third corner is crossed near 0.03 s: start the hold or the drop at each cycle of
+  // [0.020, 0.036] s (its approach, the committing and the centred step among them).
+  for (int k = 20; k <= 36; ++k) {
+    const double t = 0.001 * k;
+    RunOpts h = accel_opts();
+    h.hold_steps = {{t, true}, {t + 0.02, false}};
+    run_checked(m, p, h);
+    RunOpts o = accel_opts();
+    o.override_steps = {{t, 30}};
+    run_checked(m, p, o);
+    RunOpts up = accel_opts();
+    up.override_steps = {{0.0, 50}, {t, 100}};
+    run_checked(m, p, up);
+  }
+}
+
 }  // namespace
 }  // namespace cncore::motion::test
