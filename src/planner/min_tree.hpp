@@ -44,8 +44,9 @@ class MinTree {
 
   std::size_t leaves() const { return size_; }
   double at(std::size_t i) const { return storage_[offset_[0] + i]; }
-  // The root's slot is kept: read every cycle for several trees (one load less each).
-  double min() const { return storage_[root_]; }
+  // A copy of the root's value kept in the object: read every cycle for several trees, whose
+  // root lines the block pushes between two cycles would otherwise have evicted.
+  double min() const { return min_; }
 
   void set(std::size_t i, double value) {
     storage_[offset_[0] + i] = value;
@@ -58,6 +59,7 @@ class MinTree {
       if (parent == m) break;  // nothing above changes
       parent = m;
     }
+    min_ = storage_[root_];
   }
 
   // Index of a leaf holding min(), the lowest such (meaningless when the tree is empty).
@@ -89,6 +91,7 @@ class MinTree {
   }
 
  private:
+  double min_ = kEmpty;  // == storage_[root_]
   std::size_t size_;
   std::vector<std::size_t> offset_;                         // start of each level in storage_
   std::size_t top_ = 0;                                     // the root's level
