@@ -54,14 +54,11 @@ class FiniteDifferences {
   // acceleration are left unset, their numerators dv, dspeed, dv2 are set instead (for a caller
   // that keeps only maxima and can skip most divisions: summary.cpp). Velocities, length and
   // speed as update(); both may be mixed (the state carried between calls is the same).
+  // Over the first N axes only (N >= used_axes()): the same doubles (the axes left out are
+  // disabled: v = 0, and the squared sums gain only trailing +0 terms), with loops of a fixed
+  // length and no work for the axes that cannot move.
+  template <std::size_t N = kMaxAxes>
   const CycleDifferences& update_deltas(double t_s, const AxisVec& position) {
-    return advance<false, kMaxAxes>(t_s, position);
-  }
-  // update_deltas() over the first N axes only (N >= used_axes()): the same doubles (the axes
-  // left out are disabled: v = 0, and the squared sums gain only trailing +0 terms), with
-  // loops of a fixed length and no work for the axes that cannot move.
-  template <std::size_t N>
-  const CycleDifferences& update_deltas_first(double t_s, const AxisVec& position) {
     return advance<false, N>(t_s, position);
   }
 

@@ -207,16 +207,12 @@ void SummaryObserver::add_event(const AuxEvent& event) {
 }
 
 void SummaryObserver::on_sample(const motion::Sample& s) {
-  // Machines with X, Y, Z only (the usual case) take loops of 3 axes, fully unrolled: a
-  // shorter cycle, and the next sample's work overlaps more of this one's divisions and root.
-  if (diff_.used_axes() <= 3) {
-    sample<3>(s);
-  } else {
-    sample<kMaxAxes>(s);
-  }
+  on_samples(std::span<const motion::Sample>(&s, 1));
 }
 
 void SummaryObserver::on_samples(std::span<const motion::Sample> samples) {
+  // Machines with X, Y, Z only (the usual case) take loops of 3 axes, fully unrolled: a
+  // shorter cycle, and the next sample's work overlaps more of this one's divisions and root.
   if (diff_.used_axes() <= 3) {
     for (const motion::Sample& s : samples) sample<3>(s);
   } else {
@@ -284,7 +280,7 @@ void SummaryObserver::sample(const motion::Sample& s) {
     // a = (v_k − v_{k−1}) / (distance between interval midpoints): io/differences.hpp.
     // The accelerations only as maxima: update_deltas() leaves their divisions to
     // raise_max_quotient (|Δv / h| = |Δv| / h exactly: rounding is symmetric).
-    const CycleDifferences& d = diff_.update_deltas_first<N>(s.t_s, s.position);
+    const CycleDifferences& d = diff_.update_deltas<N>(s.t_s, s.position);
     if (d.moved) {
       const double dt = d.dt_s;
       // Every axis, without a branch: a disabled axis has vel = acc = 0 (differences.hpp), so

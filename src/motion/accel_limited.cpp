@@ -331,6 +331,34 @@ double landing_step(double d, double a) {
 // A bound b = √X − c is left out of a minimum when X ≥ above(t + c) = (t + c)²·(1 + kSkipMargin):
 // then √X − c ≥ t + (t + c)·kSkipMargin/2 exactly, far above the few roundings of either side.
 constexpr double kSkipMargin = 1e-9;
+// The cosine c = E·S of the turn between two lines that move X, Y, Z only; false when a rotary
+// axis moves (the closed forms of 9. and 11. are for linear axes).
+bool linear_turn_cos(const AxisVec& e, const AxisVec& s, double& c) {
+  for (std::size_t i = 3; i < kMaxAxes; ++i) {
+    if (e[i] != 0 || s[i] != 0) return false;
+  }
+  c = dot(e.xyz(), s.xyz());
+  return true;
+}
+
+// The largest x in (u, hi] with ok(x) (11.'s step searches): hi itself, else the best of a
+// bisection of kCentreSearch checks (every answer is checked itself); u when none is found.
+template <typename Ok>
+double largest_ok(double u, double hi, Ok ok) {
+  if (ok(hi)) return hi;
+  double lo = u, best = u;
+  for (int it = 0; it < kCentreSearch; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    if (ok(mid)) {
+      best = mid;
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  return best;
+}
+
 double above(double x) {
   return x * x * (1 + kSkipMargin);
 }
@@ -1577,9 +1605,8 @@ double AccelLimitedAccDec::after_corner() {
   if (pos_state(cap_pos) != State::kActive) return kInf;
   const AxisVec& e = x.e;
   const AxisVec sd = b.start_direction();
-  for (std::size_t i = 3; i < kMaxAxes; ++i) {
-    if (e[i] != 0 || sd[i] != 0) return kInf;
-  }
+  double c = 0;
+  if (!linear_turn_cos(e, sd, c)) return kInf;
   // Chords: d1 = α·E + β·S (the crossing, u1 = α + β), d2 = u2·S. With t = u2 − β:
   //   per axis |t·S_i − α·E_i| ≤ a_i,  tangential |u2 − u1| ≤ A0,
   //   normal a_n² = |d2 − d1|² − (|d2| − |d1|)² = 2·u2·(|d1| − β − α·c) ≤ A0²  (c = E·S; the
@@ -1601,8 +1628,6 @@ double AccelLimitedAccDec::after_corner() {
     lo = std::max(lo, beta + std::min(t1, t2));
     hi = std::min(hi, beta + std::max(t1, t2));
   }
-  const Vec3 ex = e.xyz(), sx = sd.xyz();
-  const double c = ex.x * sx.x + ex.y * sx.y + ex.z * sx.z;
   const double d1 = std::sqrt(std::max(0.0, alpha * alpha + beta * beta + 2 * alpha * beta * c));
   const double bend = d1 - beta - alpha * c;
   if (bend > 0) hi = std::min(hi, amax * amax / (2 * bend));
@@ -1637,11 +1662,7 @@ bool AccelLimitedAccDec::centre_setup(std::size_t g, const Segment& a, const Seg
   ct.c_mm = cap.c_mm;
   ct.e = a.end_direction();
   ct.sd = b.start_direction();
-  for (std::size_t i = 3; i < kMaxAxes; ++i) {
-    if (ct.e[i] != 0 || ct.sd[i] != 0) return false;
-  }
-  const Vec3 ex = ct.e.xyz(), sx = ct.sd.xyz();
-  ct.c = ex.x * sx.x + ex.y * sx.y + ex.z * sx.z;
+  if (!linear_turn_cos(ct.e, ct.sd, ct.c)) return false;
   // Not at folds: there the checker may read the sample before j as lying after it (9.).
   if (ct.c < -0.5) return false;
   // The cycle after the step u0 takes u1 ≤ Vg (the cap is active from c = j − Vg on, and the
@@ -1712,19 +1733,7 @@ double AccelLimitedAccDec::centred_step(const Centre& ct, double u, double hi) c
   const double d = ct.j - pos_mm_;
   hi = std::min(hi, centred_top(ct, -2, 1, d, ct.vg - d));
   if (!(hi > u)) return u;
-  if (centred_ok(ct, pos_mm_, hi)) return hi;
-  // The largest feasible step by bisection (each answer is checked itself).
-  double lo = u, best = u;
-  for (int it = 0; it < kCentreSearch; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    if (centred_ok(ct, pos_mm_, mid)) {
-      best = mid;
-      lo = mid;
-    } else {
-      hi = mid;
-    }
-  }
-  return best;
+  return largest_ok(u, hi, [&](double x) { return centred_ok(ct, pos_mm_, x); });
 }
 
 double AccelLimitedAccDec::committing_step(const Centre& ct, double u, double hi,
@@ -1740,21 +1749,7 @@ double AccelLimitedAccDec::committing_step(const Centre& ct, double u, double hi
   const double d = ct.j - pos_mm_, ra = ct.r_hi * a0_;
   hi = std::min(hi, centred_top(ct, -3, 2, d + 2 * ra, ct.vg - d - ra));
   if (!(hi > u)) return u;
-  double best = u;
-  if (ok(hi)) {
-    best = hi;
-  } else {
-    double lo = u;
-    for (int it = 0; it < kCentreSearch; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      if (ok(mid)) {
-        best = mid;
-        lo = mid;
-      } else {
-        hi = mid;
-      }
-    }
-  }
+  const double best = largest_ok(u, hi, ok);
   if (best > u) lo_next = best - ct.r_hi * a0_;
   return best;
 }
