@@ -221,16 +221,17 @@ TEST_F(Cli, ErrorAtTheLastLineLeavesNoOutputAndNoTemporary) {
 }
 
 TEST_F(Cli, InterruptedRunLeavesNoTemporary) {
-  // Stop mode on many short segments runs long enough to be killed mid-way.
-  std::string program = "G21 G90 G17 F6000\n";
-  for (int i = 0; i < 20000; ++i) program += i % 2 ? "G1 X0\n" : "G1 X1\n";
-  program += "M30\n";
-  write_file(dir_ / "long.ngc", program);
+  // A 20 000 s dwell is 20 M cycles of trajectory, seconds of work however fast the run gets; the
+  // signal is sent as soon as the trajectory's temporary exists, so the run is always mid-way
+  // (a fixed sleep let a fast machine finish first).
+  write_file(dir_ / "long.ngc", "G21 G90 G17 F6000\nG1 X1\nG4 P20000\nG1 X0\nM30\n");
   for (const char* sig : {"TERM", "HUP"}) {  // a background job ignores SIGINT
     const std::string cmd = "cd " + quote(dir_.string()) + " && (" + quote(CNCORE_BIN) +
-                            " run long.ngc --mode stop --trajectory t.csv --summary s.json"
-                            " >/dev/null 2>&1 & pid=$!; sleep 0.3; kill -" +
-                            sig + " $pid; wait $pid)";
+                            " run long.ngc --trajectory t.csv --summary s.json"
+                            " >/dev/null 2>&1 & pid=$!; i=0;"
+                            " while [ $i -lt 500 ] && ! ls t.csv.tmp-* >/dev/null 2>&1;"
+                            " do sleep 0.01; i=$((i+1)); done; kill -" +
+                            std::string(sig) + " $pid; wait $pid)";
     const int status = std::system(cmd.c_str());
     // The shell reports death by signal as 128 + signal number.
     const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
