@@ -455,6 +455,7 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       head_r_(buffer.capacity(), 1.0),
       tail_mm_(buffer.capacity(), 0.0),
       tail_r_(buffer.capacity(), 1.0),
+      s0_mm_(buffer.capacity(), 0.0),
       arc_g_(buffer.capacity(), 0.0),
       arc_rho_(buffer.capacity(), 0.0),
       lin_r_(buffer.capacity(), 1.0),
@@ -542,6 +543,7 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   ratio_[slot] = r;
   vcap_[slot] = vcap;
   len_mm_[slot] = s.length_mm;
+  s0_mm_[slot] = s.s0_mm;
   head_mm_[slot] = tail_mm_[slot] = 0;
   head_r_[slot] = tail_r_[slot] = 1;
   // Head zones reaching here from earlier segments (8.); expired ones are dropped.
@@ -730,11 +732,6 @@ void AccelLimitedAccDec::on_joint(std::uint64_t index_a, const Segment& a, const
   // axis limit (at a capped corner the cap is lowered until the zone's floor fits beside it).
   if (!(vg < 0.999 * around)) return;  // the segments' own caps already hold there
   insert_joint_cap(sa, sb, a.end_mm(), a.length_mm, vg);
-}
-
-bool AccelLimitedAccDec::holds(std::uint64_t index) const {
-  const std::size_t s = 3 * buf_.slot(index);
-  return owner_[s] != kNone || owner_[s + 1] != kNone || owner_[s + 2] != kNone;
 }
 
 void AccelLimitedAccDec::on_retire(std::uint64_t index) {
@@ -1047,8 +1044,12 @@ void AccelLimitedAccDec::advance_current() {
            (buf_[cur_].kind != ItemKind::kMotion || pos_mm_ >= buf_[cur_].end_mm());
   };
   if (!passed()) return;  // the usual cycle: still inside the same segment
-  cur_ = buf_.seek(cur_, pos_mm_);
+  // Hint: as many items as the last cycle that left its item skipped (fine segments of even
+  // length at an even speed: a probe or two).
+  const std::uint64_t from = cur_;
+  cur_ = buf_.seek(cur_, pos_mm_, UINT64_MAX, cur_ + cur_skip_);
   while (passed()) ++cur_;
+  cur_skip_ = cur_ - from;
 }
 
 double AccelLimitedAccDec::sigma_at(double pos_mm) const {
@@ -1108,23 +1109,24 @@ double AccelLimitedAccDec::seg_sigma(std::size_t slot, double x_mm) const {
   return out;
 }
 
-double AccelLimitedAccDec::r_span(double from_mm, double to_mm) const {
+double AccelLimitedAccDec::r_span(double from_mm, double to_mm, std::uint64_t* skip) const {
   double out = 1;
   if (buf_.empty()) return out;
   const std::uint64_t first = std::max(cur_, buf_.begin_index()), end = buf_.end_index();
   if (first >= end) return out;
-  // One item of the walk "motion items from `first` while s0 ≤ to"; false: stop.
+  // One item of the walk "motion items from `first` while s0 ≤ to"; false: stop. From the
+  // compact per-slot arrays (the same doubles as the Segment's): the pushes between two cycles
+  // of fine segments evict the cold Segments the walk would otherwise load.
   auto item = [&](std::uint64_t k) {
-    const Segment& s = buf_[k];
-    if (s.kind != ItemKind::kMotion) return true;
-    if (s.s0_mm > to_mm) return false;
-    if (s.end_mm() < from_mm) return true;
+    if (!buf_.is_motion(k)) return true;
     const std::size_t slot = buf_.slot(k);
+    const double s0 = s0_mm_[slot];
+    if (s0 > to_mm) return false;
+    const double e = buf_.end_mm_of(k);
+    if (e < from_mm) return true;
     double rate = ratio_[slot];
-    if (std::max(from_mm, s.s0_mm) - s.s0_mm < head_mm_[slot]) {
-      rate = std::min(rate, head_r_[slot]);
-    }
-    if (std::min(to_mm, s.end_mm()) - s.s0_mm > s.length_mm - tail_mm_[slot]) {
+    if (std::max(from_mm, s0) - s0 < head_mm_[slot]) rate = std::min(rate, head_r_[slot]);
+    if (std::min(to_mm, e) - s0 > len_mm_[slot] - tail_mm_[slot]) {
       rate = std::min(rate, tail_r_[slot]);
     }
     out = std::min(out, rate);
@@ -1140,19 +1142,27 @@ double AccelLimitedAccDec::r_span(double from_mm, double to_mm) const {
                         : std::min(t.min_range(a, cap), t.min_range(0, a + n - cap));
   };
   // The usual cycle: the step stays inside the tool's segment.
-  const Segment& f = buf_[first];
-  if (f.kind == ItemKind::kMotion && to_mm < f.end_mm()) {
+  const bool f_motion = buf_.is_motion(first);
+  const double f_end = buf_.end_mm_of(first);
+  if (f_motion && to_mm < f_end) {
     if (r_zone_.at(buf_.slot(first)) >= 1) return out;
     item(first);
     return out;
   }
   // The walk ends at or before `last`, the item containing to_mm (items after it start past
   // to_mm). Short spans: walked.
-  const std::uint64_t last = buf_.seek(first, to_mm);
-  if (range_min(r_zone_, buf_.slot(first), static_cast<std::size_t>(last - first + 1)) >= 1) {
+  // (Hint: the skip of the last call for the same kind of span, when the caller keeps one.)
+  const std::uint64_t last =
+      buf_.seek(first, to_mm, UINT64_MAX, skip != nullptr ? first + *skip : 0);
+  if (skip != nullptr) *skip = last - first;
+  // The leaves of first and last, and the minimum of those between (used again below).
+  const double inner = last > first + 1 ? range_min(r_zone_, buf_.slot(first + 1),
+                                                    static_cast<std::size_t>(last - first - 1))
+                                        : MinTree::kEmpty;
+  if (std::min(std::min(r_zone_.at(buf_.slot(first)), inner), r_zone_.at(buf_.slot(last))) >= 1) {
     return out;
   }
-  if (last - first <= 8 || f.kind != ItemKind::kMotion || !(f.end_mm() > from_mm)) {
+  if (last - first <= 8 || !f_motion || !(f_end > from_mm)) {
     for (std::uint64_t k = first; k <= last && item(k); ++k) {
     }
     return out;
@@ -1161,8 +1171,7 @@ double AccelLimitedAccDec::r_span(double from_mm, double to_mm) const {
   // and the last one as in the walk; every item between starts after from_mm and ends at or
   // before to_mm (seek() skipped it), so its rate is that of the whole item: a range minimum.
   if (!item(first)) return out;
-  const std::size_t a = buf_.slot(first + 1), n = static_cast<std::size_t>(last - first - 1);
-  out = std::min(out, range_min(r_zone_, a, n));
+  out = std::min(out, inner);
   item(last);
   return out;
 }
@@ -1812,7 +1821,7 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     if (in.stop_mm > pos_mm_ && in.stop_mm <= reach) {
       reach = std::min(reach, std::nextafter(in.stop_mm, pos_mm_));
     }
-    const double r_reach = r_span(pos_mm_, reach);
+    const double r_reach = r_span(pos_mm_, reach, &reach_skip_);
     r = r_reach;
     // Past the corner just crossed, its head zone (7.) is replaced by the exact limit: within
     // b before its tail zone, b's own r.
@@ -1904,7 +1913,9 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     a_recover = std::max(a, std::min({a0_, lin_r_[slot] * a0_, at}));
   }
   const double feed = feed_recover_ ? std::max(step_ - a_recover, feed_limit) : feed_limit;
-  u = std::min({u, feed, active_geo_.min(), to_stop, after});
+  // (Nested: an initializer list became a loop over a stack array; the same double, the first
+  // of equal values as there.)
+  u = std::min(std::min(std::min(std::min(u, feed), active_geo_.min()), to_stop), after);
 
   // The geometric braking bounds (3.): x ≤ √(A0² + K − 2·A0·σ) − A0 ≥ u when the root's
   // argument is ≥ (u + A0)²; lattice keys: x ≤ √(K − 2·A0·σ) − A0/2 ≥ u when K − 2·A0·σ ≥

@@ -45,7 +45,10 @@ class AccelLimitedAccDec final : public AccDec {
   void on_segment(std::uint64_t index, const planner::Segment& s) override;
   void on_joint(std::uint64_t index_a, const planner::Segment& a,
                 const planner::Segment& b) override;
-  bool holds(std::uint64_t index) const override;
+  bool holds(std::uint64_t index) const override {
+    const std::size_t s = 3 * buf_.slot(index);
+    return owner_[s] != kNone || owner_[s + 1] != kNone || owner_[s + 2] != kNone;
+  }
   void on_retire(std::uint64_t index) override;
   bool detach(std::uint64_t index) override;
   void step(const CycleInput& in) override;
@@ -104,7 +107,9 @@ class AccelLimitedAccDec final : public AccDec {
   double seg_sigma(std::size_t slot, double x_mm) const;
   // The lowest r over path positions [from, to] (the current segment and the following ones),
   // with the joint zones.
-  double r_span(double from_mm, double to_mm) const;
+  // skip (optional): in, the hint's distance from the tool's item for the search of to_mm's
+  // item; out, that item's distance.
+  double r_span(double from_mm, double to_mm, std::uint64_t* skip = nullptr) const;
   // A joint a → b without a stop between: the acceleration zones on both sides (see 7.).
   void joint_zones(std::uint64_t index_a, std::size_t slot_b, const planner::Segment& b);
   void advance_current();
@@ -177,6 +182,7 @@ class AccelLimitedAccDec final : public AccDec {
   // Per buffer slot: the joint zones (see 7.): r ≤ head_r_ on the first head_mm_, ≤ tail_r_ on
   // the last tail_mm_ of the segment.
   Buf<double> len_mm_, head_mm_, head_r_, tail_mm_, tail_r_;
+  Buf<double> s0_mm_;  // the segment's s0_mm (r_span() reads it without the Segment)
   // Per buffer slot, arcs whose plane axes share normal and tangential acceleration: the axis
   // bound g (0: none), the radius of curvature, and the ratio of the linear axis shares alone —
   // an override decrease decelerates with what the current speed leaves (5.).
@@ -247,7 +253,9 @@ class AccelLimitedAccDec final : public AccDec {
     AxisVec e;
   } crossed_;
 
-  std::uint64_t cur_ = 0;  // buffer item under the tool
+  std::uint64_t cur_ = 0;         // buffer item under the tool
+  std::uint64_t cur_skip_ = 0;    // items advance_current() skipped when it last left an item
+  std::uint64_t reach_skip_ = 0;  // items from cur_ to the item of the last step's reach
   double pos_mm_ = 0, step_ = 0, last_bound_ = 0;
   double cached_stop_mm_ = -1, cached_stop_sigma_ = 0;
   double prev_or_ = 0;         // the override of the last cycle

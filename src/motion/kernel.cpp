@@ -268,13 +268,24 @@ struct Kernel::Impl {
   }
 
   void retire() {
+    if (al != nullptr) {
+      retire_with(*al);
+    } else if (ma != nullptr) {
+      retire_with(*ma);
+    } else {
+      retire_with(acc);
+    }
+  }
+  // With the acc/dec's own (final) type: its calls per retired item are direct ones.
+  template <typename A>
+  void retire_with(A& a) {
     while (buf.begin_index() < out_idx) {
       const std::uint64_t i = buf.begin_index();
-      if (buf[i].kind == ItemKind::kMotion && acc.holds(i) &&
-          (buf.size() + 3 <= buf.capacity() || !acc.detach(i))) {
+      // (The kind from the compact array: the retired item's Segment is cold.)
+      if (buf.is_motion(i) && a.holds(i) && (buf.size() + 3 <= buf.capacity() || !a.detach(i))) {
         break;
       }
-      acc.on_retire(i);
+      a.on_retire(i);
       buf.pop_front();
     }
   }
@@ -383,7 +394,7 @@ struct Kernel::Impl {
     }
     const AxisVec pos = post_filter(path);
     // Once the program has ended the producer stops asking wants_block(): retire here then.
-    if (ended) retire();
+    if (ended) retire_with(a);
     fill(out, cur, pos, path, a.tool_speed_pc());
     return true;
   }
