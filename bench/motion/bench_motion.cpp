@@ -13,7 +13,10 @@
 // --runs N (runs per latency benchmark, default 3), --histogram (print the per-cycle latency
 // histograms to stderr), --digest (print a hash of
 // every program's samples instead of benchmarking), --construct TYPE N (time N kernel
-// constructions in a row instead of benchmarking).
+// constructions in a row instead of benchmarking), --evict-kb N (Latency: write N KB of other
+// memory, untimed, before every step — the cache traffic of the pushes a finer program makes
+// between two cycles, on a coarse one: how much of a fine program's step() is its input's
+// traffic rather than its work).
 #include <benchmark/benchmark.h>
 #include <sys/mman.h>
 #include <sys/resource.h>
@@ -306,6 +309,8 @@ void print_histogram(const std::string& title, const std::vector<double>& sorted
 // cycles/s: cycles / Σ step time of the fastest run (the timer's own cost subtracted). A timed
 // empty call right after each step shows what the machine does to a 10 ns window (floor_*).
 int g_runs = 3;
+std::size_t g_evict_kb = 0;
+std::vector<unsigned char> g_evict;  // --evict-kb's scratch memory
 
 void BM_Latency(benchmark::State& state, LazyProgram* lazy, int type) {
   const Program* prog = &lazy->get();
@@ -346,6 +351,9 @@ void BM_Latency(benchmark::State& state, LazyProgram* lazy, int type) {
       for (;;) {
         while (next < n && k.wants_block()) k.push(prog->blocks[next++]);
         if (next == n) k.end_of_program();
+        // One byte per 64-byte line, with a running value the compiler cannot drop.
+        for (std::size_t i = 0; i < g_evict.size(); i += 64) g_evict[i] += 1;
+        benchmark::ClobberMemory();
         const std::uint64_t t0 = ticks();
         const bool more = k.step(s);
         const std::uint64_t t1 = ticks();
@@ -394,6 +402,7 @@ void BM_Latency(benchmark::State& state, LazyProgram* lazy, int type) {
   }
   state.counters["cycles"] = static_cast<double>(cycles);
   state.counters["runs"] = g_runs;
+  state.counters["evict_kb"] = static_cast<double>(g_evict_kb);
   state.counters["step_Mcycles_per_s"] = best_sum_ns > 0 ? 1e3 * cycles / best_sum_ns : 0;
   // The same from the per-cycle minimum over the runs (preemption taken out cycle by cycle):
   // steadier than the fastest run on the loaded machine, for before/after comparisons.
@@ -513,6 +522,9 @@ int main(int argc, char** argv) {
       construct_n = std::max(1, std::atoi(argv[++i]));
     } else if (std::strcmp(argv[i], "--histogram") == 0) {
       g_histogram = true;
+    } else if (std::strcmp(argv[i], "--evict-kb") == 0 && i + 1 < argc) {
+      g_evict_kb = static_cast<std::size_t>(std::max(0, std::atoi(argv[++i])));
+      g_evict.assign(g_evict_kb * 1024, 0);
     } else if (std::strcmp(argv[i], "--runs") == 0 && i + 1 < argc) {
       g_runs = std::max(1, std::atoi(argv[++i]));
     } else if (std::strcmp(argv[i], "--shared") == 0 && i + 1 < argc) {
