@@ -29,6 +29,10 @@ constexpr Vec3 cross(Vec3 a, Vec3 b) {
 inline double norm(Vec3 a) {
   return std::sqrt(dot(a, a));
 }
+// Component i (0: x, 1: y, 2: z) of v.
+constexpr double component(const Vec3& v, std::size_t i) {
+  return i == 0 ? v.x : (i == 1 ? v.y : v.z);
+}
 
 // Position (or displacement) of every axis slot; unused slots stay 0.
 struct AxisVec {

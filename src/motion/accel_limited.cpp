@@ -192,6 +192,11 @@
 //    both joints — or, if that is below L, at L (no step then skips the middle, and each
 //    corner's own zone holds). Sized for the turn alone (the speed change left to the zones of
 //    the single corners), a 1.3 µm line between two corners gave 1 407 mm/s² on a 1 400 axis.
+//    Longer chains (a polyline fillet, a tiny polygon: many corners within one step) are bounded
+//    by the kernel (planner/turn_window.hpp): the joint's speed V keeps V·spread_i ≤ a_i, the
+//    spread of the tangent over (j − V, j]; given that spread T, the zone here also meets
+//    |Δu|·max|e_i| + V·T_i ≤ a_i and |Δu| + V·|T| ≤ A0 (d_max), and where its reach back over
+//    kZoneWalk segments falls short of 2V the chain is passed at what that reach covers.
 //
 // 8. Jerk stage and post filter. With a jerk limit the tool's step is the moving average of the
 //    last T2 commanded steps (T2 = ⌈2·Amax/(Jmax·τ)⌉, planner::make_limits): its acceleration is
@@ -361,10 +366,6 @@ double largest_ok(double u, double hi, Ok ok) {
 
 double above(double x) {
   return x * x * (1 + kSkipMargin);
-}
-
-double component(const Vec3& v, std::size_t i) {
-  return i == 0 ? v.x : (i == 1 ? v.y : v.z);
 }
 
 // Segments shorter than a step between corners (a chain, 7.): tangent at both ends, length,
@@ -1261,11 +1262,34 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   // Headroom per axis left by the turn at speed v (7.): with both steps ≤ V and |u2 − u1| ≤ D
   // the worst second differences are V·(S_i − E_i) − D·S_i, V·(S_i − E_i) + D·E_i, D·S_i and
   // D·E_i, each plus the arcs' sag; the largest D meeting all (< 0: the turn alone is too much).
+  // A chain of short segments (the tangent's spread over the window before the joint,
+  // planner/turn_window.hpp, beyond this corner's own turn): a pair of steps ≤ V whose window
+  // ends here sees |Δu|·|e_i| + V·T_i on axis i (e_i the tangent somewhere in the window, ≤ its
+  // largest |e_i|) and |Δu| + V·T as a whole; T taken at the kernel's speed, ≥ every V used
+  // here (a shorter window has no more spread).
+  const planner::Turn chain_turn = given ? corner_turn_ : planner::Turn{};
+  const bool chained = [&] {
+    double own2 = 0;
+    for (std::size_t i = 0; i < kMaxAxes; ++i) own2 += (s[i] - e[i]) * (s[i] - e[i]);
+    // (A spread beyond the corner's own that adds less than 0.01 % of A0 at the corner speed,
+    // the wobble of a line cut into pieces with rounded coordinates, is left to the margins.)
+    return (chain_turn.total - std::sqrt(own2)) * corner > 1e-4 * a0_;
+  }();
   auto d_max = [&](double v) {
     double d = r_hi * a0_;
+    if (chained) {
+      if (v * chain_turn.total > a0_) return -1.0;
+      d = std::min(d, a0_ - v * chain_turn.total);
+    }
     for (std::size_t i = 0; i < kMaxAxes; ++i) {
       if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
       const double ai = lim_.axis_amax_pc2[i] - sag(side_a, v, i) - sag(side_b, v, i);
+      if (chained) {
+        const double tc = v * chain_turn.axis[i];
+        if (tc > ai) return -1.0;
+        const double m = chain_turn.top[i];  // the largest |tangent_i| in the window
+        if (m > 1e-12) d = std::min(d, (ai - tc) / m);
+      }
       const double t = v * (s[i] - e[i]);
       if (std::abs(t) > ai) return -1.0;
       if (std::abs(s[i]) > 1e-12) {
@@ -1354,6 +1378,27 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
       chain(prev_.end_dir2, mids, 2, std::min({prev_.vg2, prev_.vg, vj}));
     }
     vj = std::min(vj, zone_chain_vg_);
+  }
+  // A chain's zone must reach back over [j − (2 + lag)·V, j]; the walk below covers at most
+  // kZoneWalk segments, so where they are shorter the chain is passed slower instead.
+  if (chained && d < r_top * a0_) {
+    double from = a.end_mm();
+    std::size_t walked = 0;
+    bool limited = false;
+    for (std::uint64_t k = index_a + 1; k-- > std::max(cur_, buf_.begin_index());) {
+      if (!buf_.is_motion(k)) {
+        if (buf_[k].barrier) break;
+        continue;
+      }
+      if (walked == kZoneWalk) {
+        limited = true;
+        break;
+      }
+      from = buf_[k].s0_mm;
+      ++walked;
+      if (from <= a.end_mm() - (2 + lag_) * vj) break;
+    }
+    if (limited) vj = std::min(vj, (a.end_mm() - from) / (2 + lag_));
   }
   // The joint's cap: the passing speed, or lower where the floor or a chain needs it.
   const double cap_v = std::min(vj, zone_chain_vg_);

@@ -16,6 +16,7 @@
 #include "planner/buffer.hpp"
 #include "planner/huge_pages.hpp"
 #include "planner/min_tree.hpp"
+#include "planner/turn_window.hpp"
 
 namespace cncore::motion {
 
@@ -35,12 +36,15 @@ class AccelLimitedAccDec final : public AccDec {
   // for the joint the next on_segment() closes, and the directions there (a's end, b's start):
   // joint_zones() takes them instead of computing the same doubles again (a per-block cost of
   // fine programs).
+  // `turn`: the path's turn over the cycle before the joint at corner_pc (a chain of short
+  // segments, planner/turn_window.hpp), which the joint's zone must leave room for (7.).
   void set_next_corner(std::uint64_t index_a, double corner_pc, const AxisVec& a_end,
-                       const AxisVec& b_start) {
+                       const AxisVec& b_start, const planner::Turn& turn = {}) {
     corner_index_a_ = index_a;
     corner_pc_ = corner_pc;
     corner_e_ = a_end;
     corner_s_ = b_start;
+    corner_turn_ = turn;
   }
   void on_segment(std::uint64_t index, const planner::Segment& s) override;
   void on_joint(std::uint64_t index_a, const planner::Segment& a,
@@ -199,6 +203,7 @@ class AccelLimitedAccDec final : public AccDec {
   std::uint64_t corner_index_a_ = ~std::uint64_t{0};  // set_next_corner()
   double corner_pc_ = 0;
   AxisVec corner_e_, corner_s_;
+  planner::Turn corner_turn_;
   double sigma_total_ = 0;
 
   // Caps: three positions per buffer slot (range cap of the segment's speed, of its feed, the

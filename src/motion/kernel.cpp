@@ -11,6 +11,7 @@
 #include "motion/moving_average.hpp"
 #include "planner/buffer.hpp"
 #include "planner/segment.hpp"
+#include "planner/turn_window.hpp"
 
 namespace cncore::motion {
 
@@ -67,6 +68,8 @@ struct Kernel::Impl {
         seg_lim(segment_limits(lim, o)),
         // Two items per block at most (an exact-stop block adds its stop event).
         buf(std::max<std::size_t>(4, static_cast<std::size_t>(m.lookahead_blocks) + 2)),
+        // (The largest step: the top speed or the rapid rate, and one more cycle's rise.)
+        turns(buf.capacity(), 1.01 * (std::max(lim.vmax_pc, lim.rapid_pc) + lim.amax_pc2)),
         acc_owner(make_accdec(buf, lim, o, m)),
         acc(*acc_owner),
         ma(dynamic_cast<MovingAverageAccDec*>(acc_owner.get())),
@@ -160,13 +163,20 @@ struct Kernel::Impl {
       }
       any_fixed = any_fixed || seg.override_fixed;
       const std::uint64_t idx = buf.push(seg);
+      // A chain of segments shorter than a step: the turn within one step before the joint
+      // (planner/turn_window.hpp) may hold the passing speed lower than the corner alone.
+      const bool chained = joint && vg > 0;
+      turns.on_segment(buf[idx], chained);
+      planner::Turn turn;
+      const double vg_chain =
+          chained ? turns.chain_speed_pc(buf, last_motion, idx, vg, lim, turn) : vg;
       if (joint && al != nullptr) {
-        al->set_next_corner(last_motion, vg, a_end, b_start);  // (slow_stops false)
+        al->set_next_corner(last_motion, vg_chain, a_end, b_start, turn);  // (slow_stops false)
       }
       acc.on_segment(idx, buf[idx]);
       if (have_motion && !barrier_since_motion && last_motion >= buf.begin_index()) {
         if (ma != nullptr) {
-          ma->on_joint(last_motion, buf[last_motion], buf[idx], vg);  // same joint as vg's
+          ma->on_joint(last_motion, buf[last_motion], buf[idx], vg_chain);  // same joint
         } else {
           acc.on_joint(last_motion, buf[last_motion], buf[idx]);
         }
@@ -404,6 +414,7 @@ struct Kernel::Impl {
   planner::Limits lim;
   planner::Limits seg_lim;
   planner::SegmentBuffer buf;
+  planner::TurnWindow turns;
   std::unique_ptr<AccDec> acc_owner;
   AccDec& acc;
   MovingAverageAccDec* ma;  // acc when it is the moving average (non-virtual fast path), else null

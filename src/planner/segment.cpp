@@ -30,10 +30,6 @@ double axis_accel_speed(double a, double d, double h_over_rho, double t) {
   return den > 0 ? 2 * a / den : kInf;
 }
 
-double component(const Vec3& v, std::size_t i) {
-  return i == 0 ? v.x : (i == 1 ? v.y : v.z);
-}
-
 }  // namespace
 
 Limits make_limits(const MachineConfig& m, bool bound_resultant) {
