@@ -226,10 +226,14 @@
 //    that keeps every axis, the tangential and the normal acceleration (and the resultant
 //    option) there, and replaces the joint's cap and its head zone by it for that one step: the
 //    samples after it see plain speed changes along S (b's own r). Kept only when the interval
-//    holds u1 − A0 (every step a cycle may choose lies in [u1 − A0, its bounds]) and the step
-//    stays inside b. The steps before the corner and the crossing step are unchanged, so every
-//    braking plan still holds. Capped corners along a lattice approach put the crossing sample
-//    near j, and the speed then rises by up to A0 at once: zigzag_0.002 22.53 → 20.54 s.
+//    holds u1 − ρ·A0 (every step a cycle may choose lies in [u1 − ρ·A0, its bounds]; ρ as in
+//    11.: the larger of σ's mean r over the crossing step and the r of b's piece at the tool,
+//    what a hold or an override decrease slows by — in this cycle they keep that r, only the
+//    increase gets b's own) and the step stays inside b. The steps before the corner and the
+//    crossing step are unchanged, so every braking plan still holds. Capped corners along a
+//    lattice approach put the crossing sample near j, and the speed then rises by up to A0 at
+//    once: zigzag_0.002 22.53 → 20.54 s. (With u1 − A0 as the lower end, a corner inside its
+//    zone at the floor, r = 0.25, never had an interval: line-contouring-xz's 4.8° corners.)
 //
 // 10. Braking on an arc with what the speed leaves. On an arc whose r was fixed for its top speed
 //    (2.), the braking bounds (3.) decelerate at r·A0 = √(g² − a_n,top²) at every speed, where
@@ -260,35 +264,43 @@
 //    (3.), so a state above the keys' bounds meets no lower r coming into the step's reach there
 //    (with the reach's r: a short arc before the window's end, 0.63 → 0.19 µm/cycle² at once).
 //
-// 11. Centred corners (between two lines, linear axes, no filter, turns ≤ 120°, b ≥ 2·(Vg + A0)).
+// 11. Centred corners (between two lines, linear axes, no filter, turns ≤ 120°, b ≥ Vg + A0).
 //    The joint cap holds the step that lands within Vg before j to Vg as well, because the
 //    crossing after it may split the turn anyhow (9.). With the step u0 landing α before j and
 //    the crossing u1 = α + β, the sample between them has the second difference
 //    (α − u0)·E + β·S: the turn is shared between this sample and the next (9.) as β : α. So u0
 //    may exceed Vg where that sample keeps every limit for every u1 the next cycle may take:
 //      - u1 ≤ Vg: the sample lands in [c, j) = [j − Vg, j), where the cap is active;
-//      - u1 ≥ u0 − r_hi·A0: every bound but this cap's allowed u0 (the step is ≤ the cycle's
+//      - u1 ≥ u0 − ρ·A0: every bound but this cap's allowed u0 (the step is ≤ the cycle's
 //        bound with this cap's key or active leaf left out, the stop's bounds included), so
-//        each allows u0 − (mean r over the step)·A0 next (3. (ii)); a hold or an override
-//        decrease slows by r·A0; r_hi the highest r from the tool to j (a's, or its tail zone's).
+//        each allows u0 − r̄·A0 next, r̄ = Δσ/u0 the mean r over the step (3. (ii); the stop's
+//        landing bounds take the lowest r up to the stop, ≤ r̄); a hold or an override decrease
+//        slows by A0 × the r of the next step's reach, ≤ the r of the piece the step lands in;
+//        ρ the larger of both (slowdown_r()). (With r_hi, the highest r from the tool to j, a
+//        step from before a tail zone at the floor counted on slowing by A0 at the sample, and
+//        the committing step was never feasible there.)
 //    The limits at the sample: per axis |(α − u0)·E_i + β·S_i| ≤ a_i, tangential |u1 − u0| ≤ A0
 //    (path speeds), the checker's chord normal a_n² = 2·u0·(|d1| − α − β·c) ≤ A0² (c = E·S,
 //    increasing in β), resultant |d1 − d0|² ≤ A0². Each is convex in u1 on u1 ≤ α (no crossing:
 //    a plain speed change) and on u1 ≥ α, so the ends of both pieces decide (centred_ok()). The
 //    sample after the crossing is 9.'s (or, where 9. gives no interval, the cap's Vg as before:
-//    7.'s pair of steps ≤ Vg). The sample stays ≥ 10 nm before j (the checker takes a sample
-//    that close as reaching the joint). The step u0 is the largest feasible one up to that
-//    bound: the per-axis limits with u1 = Vg are linear in u0 (α = j − tool − u0), their
-//    largest u0 first, then a bisection of 6 checks (every answer is checked itself).
+//    7.'s pair of steps ≤ Vg, whatever b's length: the crossing is ≤ Vg as without 11.; b ≥
+//    Vg + A0 keeps it inside b, so d1 = α·E + β·S). The sample stays ≥ 10 nm before j (the
+//    checker takes a sample that close as reaching the joint). The step u0 is the largest
+//    feasible one up to that bound: the per-axis limits with u1 = Vg are linear in u0
+//    (α = j − tool − u0), their largest u0 first, then a bisection of 6 checks (every answer is
+//    checked itself).
 //    One step earlier (the tool ≥ 2·Vg + A0 before j): a step u_{-1} above the cap's bound
 //    (≤ the cycle's bound without it) is taken when from its landing point p0 the slowest next
-//    step, u_{-1} − r_hi·A0, is a feasible centred step (lands in [c, j), limits as above). It is
-//    *committed*: the cycle at p0 takes the largest feasible centred step ≥ that (or the held
-//    step under a hold, if feasible), and every bound but the cap's allows it there by 3. (ii).
+//    step, u_{-1} − ρ·A0 (ρ of that step), is a feasible centred step (lands in [c, j), limits
+//    as above). It is *committed*: the cycle at p0 takes the largest feasible centred step
+//    ≥ that (or the held step under a hold, if feasible), and every bound but the cap's allows
+//    it there by 3. (ii).
 //    The braking lattice of the cap's key lands the tool at c − Vg with Vg + A0; from there the
 //    two steps let it reach the bound's pattern …, V + A0, **V** (centred), V + A0 …
-//    (zigzag_0.002: 20.54 → 18.54 s). Cost: only within 3·Vg + 3·A0 of such a corner, a few
-//    closed forms and two tree updates (the cap's leaf left out and put back).
+//    (zigzag_0.002: 20.54 → 18.54 s; with ρ for r_hi and b ≥ Vg + A0, line-contouring-xz
+//    22.575 → 22.348 s, braid_cut2d 20.526 → 20.338 s). Cost: only within 3·Vg + 3·A0 of such a
+//    corner, a few closed forms and two tree updates (the cap's leaf left out and put back).
 //
 // Without a filter the tool position is the commanded position and at rest means step 0.
 #include "motion/accel_limited.hpp"
@@ -1616,6 +1628,13 @@ double AccelLimitedAccDec::after_corner() {
   const double alpha = j - x.from_mm, beta = pos_mm_ - j, u1 = alpha + beta;
   const double amax = kMargin * a0_;
   double lo = u1 - a0_, hi = u1 + amax;
+  // The slowest step this cycle may take: u1 − ρ·A0, ρ the larger of the mean r over the
+  // crossing (every braking bound allowed u1, 3. (ii)) and the r of b's piece at the tool (a
+  // hold or an override decrease: step() keeps the zone's r for them in this cycle), as 11.
+  const double rho = std::min(
+      1.0,
+      std::max((sigma0_[sb] + seg_sigma(sb, beta) - x.sigma_from) / u1, piece_r(sb, beta)) + 1e-12);
+  const double slowest = u1 - rho * a0_;
   for (std::size_t i = 0; i < 3; ++i) {
     if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
     const double ai = kMargin * lim_.axis_amax_pc2[i];
@@ -1647,9 +1666,9 @@ double AccelLimitedAccDec::after_corner() {
   // a faster step out of this one measured slower on the whole, 13.07 → 13.24 s on
   // circle_small_segments.)
   if (b.end_mm() - pos_mm_ < u1 + a0_) return kInf;
-  // Every step the cycle may choose lies in [u1 − A0, the bounds]: the interval must hold its
+  // Every step the cycle may choose lies in [u1 − ρ·A0, the bounds]: the interval must hold its
   // lower end, or the cap stays.
-  if (!(lo <= u1 - a0_ && hi >= lo)) return kInf;
+  if (!(lo <= slowest && hi >= lo)) return kInf;
   clear(cap_pos);
   return hi;
 }
@@ -1671,9 +1690,33 @@ bool AccelLimitedAccDec::centre_setup(std::size_t g, const Segment& a, const Seg
   // r there), and a hold or an override decrease slows by r·A0. r_hi: the highest r over
   // [tool, j] (a's, or its tail zone's when the tool is inside it).
   const std::size_t sa = buf_.slot(cur_);
+  ct.slot_a = sa;
+  ct.a_s0 = a.s0_mm;
   ct.r_hi = ratio_[sa];
   if (pos_mm_ - a.s0_mm >= a.length_mm - tail_mm_[sa]) ct.r_hi = std::min(ct.r_hi, tail_r_[sa]);
+  ct.r_lo = tail_mm_[sa] > 0 ? std::min(ratio_[sa], tail_r_[sa]) : ratio_[sa];
   return true;
+}
+
+double AccelLimitedAccDec::piece_r(std::size_t slot, double x_mm) const {
+  // r_span() from here: the head's r while x < h, the tail's once the span reaches L − t.
+  double rate = ratio_[slot];
+  if (x_mm < head_mm_[slot]) rate = std::min(rate, head_r_[slot]);
+  if (tail_mm_[slot] > 0 && x_mm >= len_mm_[slot] - tail_mm_[slot]) {
+    rate = std::min(rate, tail_r_[slot]);
+  }
+  return rate;
+}
+
+double AccelLimitedAccDec::slowdown_r(std::size_t slot, double s0, double from_mm,
+                                      double to_mm) const {
+  // A step x ≤ every braking bound lets the next one be ≥ x − r̄·A0, r̄ = Δσ/x the mean r over
+  // the step (3. (ii); the stop's lattice too, and its landing bounds take the lowest r up to
+  // the stop, ≤ r̄). A hold or an override decrease slows by A0 × the r of the next step's
+  // reach, ≤ the r of the piece it starts in. (1e-12: roundings of σ.)
+  const double x0 = from_mm - s0, x1 = to_mm - s0;
+  const double mean = x1 > x0 ? (seg_sigma(slot, x1) - seg_sigma(slot, x0)) / (x1 - x0) : 1.0;
+  return std::min(1.0, std::max(mean, piece_r(slot, x1)) + 1e-12);
 }
 
 bool AccelLimitedAccDec::centred_ok(const Centre& ct, double from_mm, double u0) const {
@@ -1708,7 +1751,8 @@ bool AccelLimitedAccDec::centred_ok(const Centre& ct, double from_mm, double u0)
   const double alpha = ct.j - p1;
   // (Not within 10 nm of j: the checker takes a sample that close as reaching the joint.)
   if (!(alpha >= kMinAlphaMm) || p1 < ct.c_mm || u0 - vg > amax) return false;
-  const double lo = std::max(0.0, std::min(vg, u0 - ct.r_hi * a0_));
+  const double rho = slowdown_r(ct.slot_a, ct.a_s0, from_mm, p1);
+  const double lo = std::max(0.0, std::min(vg, u0 - rho * a0_));
   if (!sample_ok(alpha, vg) || !sample_ok(alpha, lo)) return false;
   return !(alpha > lo && alpha < vg) || sample_ok(alpha, alpha);
 }
@@ -1740,17 +1784,24 @@ double AccelLimitedAccDec::committing_step(const Centre& ct, double u, double hi
                                            double& lo_next) const {
   // The step u_{-1} to p0 may exceed the cap's braking bound when from p0 the centred step
   // lo_next = u_{-1} − r_hi·A0 (the slowest the cycle at p0 can be made to go) is feasible.
+  // lo_next = u_{-1} − ρ·A0 (the slowest the cycle at p0 can be made to go, ρ = slowdown_r()
+  // of the step) is feasible.
+  auto slowest = [&](double x) {
+    return x - slowdown_r(ct.slot_a, ct.a_s0, pos_mm_, pos_mm_ + x) * a0_;
+  };
   auto ok = [&](double x) {
-    const double l = x - ct.r_hi * a0_;
+    const double l = slowest(x);
     return l > 0 && ct.j - (pos_mm_ + x) > ct.vg && centred_ok(ct, pos_mm_ + x, l);
   };
-  // The same per-axis limits from p0 = tool + x with u0 = x − r_hi·A0: α − u0 = D + 2·r_hi·A0
-  // − 3x, Vg − α = Vg − D − r_hi·A0 + 2x.
-  const double d = ct.j - pos_mm_, ra = ct.r_hi * a0_;
-  hi = std::min(hi, centred_top(ct, -3, 2, d + 2 * ra, ct.vg - d - ra));
+  // The same per-axis limits from p0 = tool + x with u0 = x − ρ·A0: α − u0 = D + 2·ρ·A0 − 3x,
+  // Vg − α = Vg − D − ρ·A0 + 2x; ρ between the lowest and the highest r up to j (a search
+  // bound only: every answer is checked).
+  const double d = ct.j - pos_mm_;
+  auto top = [&](double ra) { return centred_top(ct, -3, 2, d + 2 * ra, ct.vg - d - ra); };
+  hi = std::min(hi, std::max(top(ct.r_hi * a0_), top(ct.r_lo * a0_)));
   if (!(hi > u)) return u;
   const double best = largest_ok(u, hi, ok);
-  if (best > u) lo_next = best - ct.r_hi * a0_;
+  if (best > u) lo_next = slowest(best);
   return best;
 }
 
@@ -1816,7 +1867,11 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     r = r_reach;
     // Past the corner just crossed, its head zone (7.) is replaced by the exact limit: within
     // b before its tail zone, b's own r.
-    if (after < kInf && reach < s.end_mm() - tail_mm_[slot]) r = ratio_[slot];
+    // (Not for a hold or an override decrease: after_corner() counted on the zone's r for them.)
+    if (after < kInf && reach < s.end_mm() - tail_mm_[slot] && !in.hold && !feed_recover_ &&
+        !(in.or_ratio < prev_or_)) {
+      r = ratio_[slot];
+    }
     // Both steps of the pair inside the arc: the step before started in it too (a pair across
     // the joint before the arc is the joint zone's, 7., which counts on r).
     if (lag_ == 0 && arc_g_[slot] > 0 && reach < s.end_mm() && pos_mm_ - step_ >= s.s0_mm &&
@@ -2002,7 +2057,7 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     if (sa.kind == ItemKind::kMotion && sb.kind == ItemKind::kMotion && !sa.arc && !sb.arc &&
         sb.s0_mm == j && pos_mm_ - step_ >= sa.s0_mm && pos_mm_ + u < j &&
         std::abs(cap.c_mm + cap.v - j) <= 1e-9 * std::max(1.0, std::abs(j)) &&
-        sb.length_mm >= 2 * (cap.v + a0_) && centre_setup(cg, sa, sb, ct)) {
+        sb.length_mm >= cap.v + a0_ && centre_setup(cg, sa, sb, ct)) {
       const double first = in.hold ? step_ - a : step_ + rise;
       // The cycle's bound with this joint's cap left out (its key or its active leaf: two tree
       // updates), the stop's bounds included; above `want` it may answer min(bound, want).
@@ -2073,7 +2128,7 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     const Segment& s = buf_[cur_];
     if (s.kind == ItemKind::kMotion && !s.arc && pos_mm_ >= s.s0_mm && pos_mm_ < s.end_mm() &&
         pos_mm_ + u >= s.end_mm()) {
-      crossed_ = {true, s.end_mm(), pos_mm_, s.end_direction()};
+      crossed_ = {true, s.end_mm(), pos_mm_, sigma_p, s.end_direction()};
     }
   }
   if (u > 0 && u >= to_stop) {

@@ -115,9 +115,18 @@ class AccelLimitedAccDec final : public AccDec {
   // 11. Centred corners: the joint (j, Vg, the cap's c), the directions and their cosine, and
   // the highest r from the tool up to j.
   struct Centre {
-    double vg = 0, j = 0, c_mm = 0, c = 0, r_hi = 1;
+    double vg = 0, j = 0, c_mm = 0, c = 0, r_hi = 1, r_lo = 1;
+    std::size_t slot_a = 0;  // a's buffer slot, and its start
+    double a_s0 = 0;
     AxisVec e, sd;
   };
+  // The slowest step the cycle after a step [from, to] on the line in `slot` (start s0) can be
+  // made to take is that step less ρ·A0 (11.): ρ = the larger of the mean r over the step and
+  // the r of the piece at `to`.
+  double slowdown_r(std::size_t slot, double s0, double from_mm, double to_mm) const;
+  // The r of the piece of the segment in `slot` at x mm from its start, as r_span() takes it for
+  // a span starting there (≥ the r of a step's reach from there: what a hold slows by).
+  double piece_r(std::size_t slot, double x_mm) const;
   bool centre_setup(std::size_t g, const planner::Segment& a, const planner::Segment& b,
                     Centre& ct) const;
   // The step u0 from from_mm lands in [c, j) and its sample keeps every limit for each crossing
@@ -243,7 +252,7 @@ class AccelLimitedAccDec final : public AccDec {
   // The last step left the line under the tool at its end j_mm (direction e there): 9.
   struct Crossed {
     bool valid = false;
-    double j_mm = 0, from_mm = 0;
+    double j_mm = 0, from_mm = 0, sigma_from = 0;  // (σ at from_mm)
     AxisVec e;
   } crossed_;
 
