@@ -92,10 +92,14 @@
 //    increase only raises the limits (the geometric caps and the stops, which keep every braking
 //    distance, are OR-independent); an override decrease lowers the feed limit, and the tool then
 //    decelerates at A_seg until it is below it (u ≥ u_prev − r·A0 for the feed part), which the
-//    spec and the checker allow for one ramp. On an arc whose r was set by the normal
-//    acceleration at its top speed, it decelerates at min(A0, √((0.98·g)² − (u²/ρ)²)) for the
-//    current step u instead (more as u falls; inside the tool's segment, no joint zone within
-//    reach, and not with a filter after this type, whose r carry (8.) assumes r).
+//    spec and the checker allow for one ramp. Without a filter at least at σ's mean r over the
+//    step just taken, r̄: the keys of the level before allowed that step, so they allow it less
+//    r̄·A0 now (3. (ii)), and r (the next reach's, 4.) may be below r̄ in a joint zone, whose
+//    decreases σ runs at their own r (7.): decelerating at r·A0 there fell behind them. On an arc
+//    whose r was set by the normal acceleration at its top speed, it decelerates at min(A0,
+//    √((0.98·g)² − (u²/ρ)²)) for the current step u instead (more as u falls; inside the tool's
+//    segment, no joint zone within reach, and not with a filter after this type, whose r carry (8.)
+//    assumes r).
 //
 // 6. Late caps. A block arrives *late* when the interpreter was late: until then the window's
 //    last end point was a stop, and the tool may already be braking for it. Its caps may then
@@ -172,6 +176,18 @@
 //        lattice forms the same: (1/2 − ρ)² ≤ 1/4), and step 1 lies in [j − 2V, j + V].
 //    The zone is part of σ, so every braking plan already accounts for it; a feed limit is
 //    followed exactly (no extra deceleration step) unless the override was just lowered.
+//    Decreases and increases need different vertices: a decrease (u2 < u1, c ∈ [0, u1]) has the
+//    extremes u2·S − u1·E and (u2 − u1)·S, so only |V·(S_i − E_i) − D·S_i| ≤ a_i and D·|S_i|,
+//    D·|E_i| ≤ a_i; an increase (c ∈ [u1 − u2, u1]) only |V·(S_i − E_i) + D·E_i| ≤ a_i and the
+//    same two. Decreases come from the braking bounds and an override decrease (σ's mean r over
+//    step 1, 3. (ii), 5.), the stop's landing bounds and a hold (the lowest r over the reach or
+//    up to the stop, 3., 4.); increases from the reach's r. So without a filter σ takes the
+//    zone's r for decreases alone, r_d = D_dec/A0 ≥ r_j (head_rd_, tail_rd_; at the V the zone
+//    is sized for, V0 or the one lowered to the floor), and r_span() keeps r_j, the lower of
+//    both. On a gentle corner whose turn leans on the speed increase's axis (the decrease
+//    relieves it) r_d is far above the floor: line-contouring-xz's 4.8° corners brake at 0.82
+//    instead of 0.25 × A0 next to the turn (22.348 → 22.193 s), cam-short-segments 7.279 →
+//    7.215, braid_cut2d 20.338 → 20.076.
 //    A zone lowers r on the tail of a (and of up to kZoneWalk earlier short segments) when b
 //    arrives: σ after the first changed segment moves, so the starts of the later segments,
 //    the window's end and the keys of the caps from there on are recomputed with the exact
@@ -275,10 +291,10 @@
 //        bound with this cap's key or active leaf left out, the stop's bounds included), so
 //        each allows u0 − r̄·A0 next, r̄ = Δσ/u0 the mean r over the step (3. (ii); the stop's
 //        landing bounds take the lowest r up to the stop, ≤ r̄); a hold or an override decrease
-//        slows by A0 × the r of the next step's reach, ≤ the r of the piece the step lands in;
-//        ρ the larger of both (slowdown_r()). (With r_hi, the highest r from the tool to j, a
-//        step from before a tail zone at the floor counted on slowing by A0 at the sample, and
-//        the committing step was never feasible there.)
+//        slows by A0 × the r of the next step's reach, ≤ the r of the piece the step lands in
+//        (an override decrease by at most r̄·A0 more, 5.); ρ the larger (slowdown_r()). (With r_hi,
+//        the highest r from the tool to j, a step from before a tail zone at the floor counted on
+//        slowing by A0 at the sample, and the committing step was never feasible there.)
 //    The limits at the sample: per axis |(α − u0)·E_i + β·S_i| ≤ a_i, tangential |u1 − u0| ≤ A0
 //    (path speeds), the checker's chord normal a_n² = 2·u0·(|d1| − α − β·c) ≤ A0² (c = E·S,
 //    increasing in β), resultant |d1 − d0|² ≤ A0². Each is convex in u1 on u1 ≤ α (no crossing:
@@ -467,6 +483,8 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       head_r_(buffer.capacity(), 1.0),
       tail_mm_(buffer.capacity(), 0.0),
       tail_r_(buffer.capacity(), 1.0),
+      head_rd_(buffer.capacity(), 1.0),
+      tail_rd_(buffer.capacity(), 1.0),
       arc_g_(buffer.capacity(), 0.0),
       arc_rho_(buffer.capacity(), 0.0),
       lin_r_(buffer.capacity(), 1.0),
@@ -556,13 +574,14 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   len_mm_[slot] = s.length_mm;
   head_mm_[slot] = tail_mm_[slot] = 0;
   head_r_[slot] = tail_r_[slot] = 1;
+  head_rd_[slot] = tail_rd_[slot] = 1;
   // Head zones reaching here from earlier segments (8.); expired ones are dropped.
   for (std::size_t k = 0; k < n_carries_;) {
     if (carries_[k].until_mm <= s.s0_mm) {
       carries_[k] = carries_[--n_carries_];
       continue;
     }
-    add_head(slot, carries_[k].until_mm - s.s0_mm, carries_[k].r);
+    add_head(slot, carries_[k].until_mm - s.s0_mm, carries_[k].r, carries_[k].r);
     ++k;
   }
   if (lag_ > 0) {
@@ -914,9 +933,10 @@ void AccelLimitedAccDec::update_r(std::uint64_t index) {
   if (r_zone_.at(slot) != rate) r_zone_.set(slot, rate);
 }
 
-void AccelLimitedAccDec::add_head(std::size_t slot, double mm, double r) {
+void AccelLimitedAccDec::add_head(std::size_t slot, double mm, double r, double r_dec) {
   if (mm <= 0 || r >= 1) return;
   head_r_[slot] = head_mm_[slot] > 0 ? std::min(head_r_[slot], r) : r;
+  head_rd_[slot] = head_mm_[slot] > 0 ? std::min(head_rd_[slot], r_dec) : r_dec;
   head_mm_[slot] = std::max(head_mm_[slot], mm);
 }
 
@@ -1113,8 +1133,8 @@ double AccelLimitedAccDec::seg_sigma(std::size_t slot, double x_mm) const {
     if (hi <= lo) continue;
     const double mid = 0.5 * (pts[k] + pts[k + 1]);
     double rate = r;
-    if (mid < h) rate = std::min(rate, head_r_[slot]);
-    if (mid > t0) rate = std::min(rate, tail_r_[slot]);
+    if (mid < h) rate = std::min(rate, head_rd_[slot]);
+    if (mid > t0) rate = std::min(rate, tail_rd_[slot]);
     out += rate * (hi - lo);
   }
   return out;
@@ -1264,7 +1284,10 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   // Headroom per axis left by the turn at speed v (7.): with both steps ≤ V and |u2 − u1| ≤ D
   // the worst second differences are V·(S_i − E_i) − D·S_i, V·(S_i − E_i) + D·E_i, D·S_i and
   // D·E_i, each plus the arcs' sag; the largest D meeting all (< 0: the turn alone is too much).
-  auto d_max = [&](double v) {
+  // A decrease (u2 < u1) meets only the first vertex and D·|S_i|, D·|E_i| ≤ a_i (its extremes
+  // over c ∈ [0, u1] are u2·S − u1·E and (u2 − u1)·S), an increase only the second (c ∈
+  // [u1 − u2, u1]: u2·S − u1·E and (u2 − u1)·E): decreases_only gives the decrease's D.
+  auto d_max = [&](double v, bool decreases_only = false) {
     double d = r_hi * a0_;
     for (std::size_t i = 0; i < kMaxAxes; ++i) {
       if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
@@ -1275,7 +1298,8 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
         d = std::min(d, std::min(ai, ai + (s[i] > 0 ? t : -t)) / std::abs(s[i]));
       }
       if (std::abs(e[i]) > 1e-12) {
-        d = std::min(d, std::min(ai, ai - (e[i] > 0 ? t : -t)) / std::abs(e[i]));
+        d = std::min(
+            d, (decreases_only ? ai : std::min(ai, ai - (e[i] > 0 ? t : -t))) / std::abs(e[i]));
       }
     }
     return d;
@@ -1313,6 +1337,9 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
       vj = lo;
     }
   }
+  // The speed decreases' D at the speed the zone is sized for (vj: v0, or lowered to the floor;
+  // a smaller V keeps it, convex in V and true at V = 0), ≥ d; chains below lower it too.
+  double d_dec = std::max(d, d_max(vj, true));
   // Two or three corners within one step (a and the segment x before it shorter than the step,
   // on_joint()): a pair of steps may turn from x's end (or the end of the one before x) to b at
   // once while the speed changes. Its zone: d also meets 7.'s vertices for that turn at the
@@ -1340,14 +1367,18 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
       const double dc = chain_d_max(from, s, m, n, vc, r_top * a0_, lim_);
       if (dc >= floor) {
         d = std::min(d, dc);
+        d_dec = std::min(d_dec, dc);
         return;
       }
       const double vf = chain_speed_pc(from, s, m, n, floor, lim_);
       if (vf > mid_mm) {
         zone_chain_vg_ = std::min(zone_chain_vg_, vf);
-        d = std::min(d, std::max(floor, chain_d_max(from, s, m, n, vf, r_top * a0_, lim_)));
+        const double df = std::max(floor, chain_d_max(from, s, m, n, vf, r_top * a0_, lim_));
+        d = std::min(d, df);
+        d_dec = std::min(d_dec, df);
       } else {
         zone_chain_vg_ = std::min(zone_chain_vg_, mid_mm);
+        d_dec = d;  // (each corner's own zone: the joint's d)
       }
     };
     if (!straight_joint(prev_.end_dir, a_start)) {
@@ -1367,6 +1398,8 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   zone_s_ = s;
   zone_a_start_ = a_start;
   const double rj = std::max(d / a0_, 1e-6);
+  // σ's r (decreases, 3. (ii)): without a filter only (with one, the output averages both).
+  const double rjd = lag_ == 0 ? std::max(rj, d_dec / a0_) : rj;
   // Every step within V of the joint is ≤ V: the joint cap's Vg when there is one, else the
   // segments' caps.
   const double v = std::min(cap_v < 0.999 * around ? cap_v : around, v_feed);
@@ -1396,7 +1429,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
       check_stop(b.end_mm(), a.end_mm(), std::min(rj, ratio_[slot_b]));
     }
   }
-  if (rj >= r_top) return;  // the segments' own r already fits
+  if (rj >= r_top) return;  // the segments' own r already fits (rjd ≥ rj)
   // The zone [j − 2V, j] may reach back over several short segments (at most kZoneWalk): each
   // gets it as (part of) its tail zone. Never under or behind the tool (σ there is in use; a
   // late joint, see 6.).
@@ -1414,17 +1447,20 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     if (x.end_mm() <= zone_start) break;
     const std::size_t sx = buf_.slot(k);
     const double covered = x.end_mm() - std::max(zone_start, x.s0_mm);
-    if (tail_mm_[sx] > 0)
+    if (tail_mm_[sx] > 0) {
       tail_r_[sx] = std::min(tail_r_[sx], rj);
-    else
+      tail_rd_[sx] = std::min(tail_rd_[sx], rjd);
+    } else {
       tail_r_[sx] = rj;
+      tail_rd_[sx] = rjd;
+    }
     tail_mm_[sx] = std::max(tail_mm_[sx], covered);
     update_r(k);
     first = k;
     ++walked;
   }
   const double head = (1 + lag_) * v;
-  add_head(slot_b, std::min(b.length_mm, head), rj);
+  add_head(slot_b, std::min(b.length_mm, head), rj, rjd);
   if (lag_ > 0 && head > b.length_mm) carry(a.end_mm() + head, rj);
   if (first > index_a) return;
   // σ after the first changed segment moved: the starts of the later ones, the end of the
@@ -1958,6 +1994,13 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     const double at = std::sqrt(std::max(0.0, g * g - an * an));
     a_recover = std::max(a, std::min({a0_, lin_r_[slot] * a0_, at}));
   }
+  // At least σ's mean r over the step just taken (no filter): the feed keys of the level before
+  // the decrease allowed it, so they allow it less that mean·A0 now (3. (ii)). Decelerating at
+  // a alone (the r over the next step's reach, lower in a joint zone than σ's r for decreases,
+  // 7.) fell behind them: 50.26 mm/s at a 50 mm/s feed (RandomProgramsWithCoupledAxesAndLines).
+  if (feed_recover_ && lag_ == 0 && step_ > 0) {
+    a_recover = std::max(a_recover, std::clamp((sigma_p - prev_sigma_) / step_, 0.0, 1.0) * a0_);
+  }
   const double feed = feed_recover_ ? std::max(step_ - a_recover, feed_limit) : feed_limit;
   u = std::min({u, feed, active_geo_.min(), to_stop, after});
 
@@ -2136,6 +2179,7 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   } else {
     pos_mm_ += u;
   }
+  prev_sigma_ = sigma_p;
   step_ = u;
   if (!jerk_on_) {
     tool_mm_ = pos_mm_;

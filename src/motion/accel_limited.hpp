@@ -144,8 +144,9 @@ class AccelLimitedAccDec final : public AccDec {
     bool valid = false;
     double j_mm = 0, from_mm = 0, lo = 0;
   } commit_;
-  // Lowers r over the first `mm` of the segment in `slot` to at most `r` (head zone).
-  void add_head(std::size_t slot, double mm, double r);
+  // Lowers r over the first `mm` of the segment in `slot` to at most `r` (head zone), and σ's r
+  // for decreases to at most `r_dec` (≥ r).
+  void add_head(std::size_t slot, double mm, double r, double r_dec);
   // A head zone that reaches past the segment it starts in (8.): r ≤ `r` up to path position
   // `until_mm`, applied to each later segment as it arrives.
   void carry(double until_mm, double r);
@@ -184,8 +185,9 @@ class AccelLimitedAccDec final : public AccDec {
   // Per buffer slot: σ at the segment start, acceleration ratio r = A_seg/A0, speed cap.
   Buf<double> sigma0_, ratio_, vcap_;
   // Per buffer slot: the joint zones (see 7.): r ≤ head_r_ on the first head_mm_, ≤ tail_r_ on
-  // the last tail_mm_ of the segment.
-  Buf<double> len_mm_, head_mm_, head_r_, tail_mm_, tail_r_;
+  // the last tail_mm_ of the segment (r_span(): speed increases, holds, the stops' landing);
+  // head_rd_ and tail_rd_ ≥ them are the zones' r for decreases (σ, the braking bounds).
+  Buf<double> len_mm_, head_mm_, head_r_, tail_mm_, tail_r_, head_rd_, tail_rd_;
   // Per buffer slot, arcs whose plane axes share normal and tangential acceleration: the axis
   // bound g (0: none), the radius of curvature, and the ratio of the linear axis shares alone —
   // an override decrease decelerates with what the current speed leaves (5.).
@@ -258,6 +260,7 @@ class AccelLimitedAccDec final : public AccDec {
 
   std::uint64_t cur_ = 0;  // buffer item under the tool
   double pos_mm_ = 0, step_ = 0, last_bound_ = 0;
+  double prev_sigma_ = 0;  // σ where the last step started
   double cached_stop_mm_ = -1, cached_stop_sigma_ = 0;
   double prev_or_ = 0;         // the override of the last cycle
   bool feed_recover_ = false;  // lowered override: above the feed limit, decelerating to it

@@ -815,6 +815,25 @@ TEST(AccelLimited, CentredCornersInsideJointZonesUnderAHoldOrAnOverrideDropAtEve
   }
 }
 
+// An override drop while the tool brakes through a gentle corner's zone for a slower feed after
+// it (seed 23 of RandomProgramsWithCoupledAxesAndLines once σ ran a zone's decreases at their own
+// r, 7.): the feed recovery decelerated at the zone's r for increases and fell behind the feed
+// keys of the level before, 50.26 mm/s on a 50 mm/s line. It now decelerates at least at σ's mean
+// r over the step just taken.
+TEST(AccelLimited, OverrideDropInsideAJointZoneKeepsTheFeedOfTheLevelBefore) {
+  const MachineConfig m = coupled_machine(2600, 2000, 2600, 4);
+  Prog p;
+  p.line_to(Vec3{-4.865, -4.28, -1.255}, 8000, PathMode::kExactPath);
+  p.line_to(Vec3{-9.63, -8.77, -2.59}, 3000, PathMode::kExactStop);
+  RunOpts o = accel_opts();
+  o.override_steps = {{0.068, 50.0}, {2.5, 100.0}};
+  const RunResult r = run(m, p.blocks, o);
+  auto lim = testing::limits_from_config(m);
+  lim.override_ramp_s = 20000 * 1.5 / 60 / (0.31 * 600) + 0.002;
+  const auto rep = testing::check_trajectory(r.traj, p.blocks, lim);
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+}
+
 // Random polylines of lines only (turns 0.5–120°, chords 0.02–3 mm, in random planes) on coupled
 // axes, with random override steps and feed holds: many capped corners with zones, where 11.
 // (committing and centred steps) and 9. (the step after the crossing) apply. P1–P5 by the
