@@ -815,6 +815,23 @@ TEST(AccelLimited, CentredCornersInsideJointZonesUnderAHoldOrAnOverrideDropAtEve
   }
 }
 
+// cam-short-segments' rosette r = 30 + 6·sin(6φ) mm, two lobes in 400 chords of 0.13–0.2 mm at
+// F 6 000 after a 30 mm line (every axis at Amax): the tool brakes and speeds up through the
+// joint zones of its 0.5–4° corners. 1.441 s before session 10; 1.430 s once σ ran the zones'
+// decreases at their own r (7.); 1.418 s with the line's own r for the rise where the pair at
+// the tool lies on one line (4.).
+TEST(AccelLimited, RosetteOfShortChordsBrakesAndRisesAtTheZonesOwnLimits) {
+  const MachineConfig m = centred_machine();
+  Prog p;
+  for (int k = 0; k <= 400; ++k) {
+    const double phi = 2 * kPi * k / 1200, r = 30 + 6 * std::sin(6 * phi);
+    p.line_to(Vec3{r * std::cos(phi), r * std::sin(phi), 0}, 6000);
+  }
+  const RunResult r = run_checked(m, p);
+  std::printf("rosette of 400 chords: %.3f s\n", r.time_s());
+  EXPECT_LE(r.time_s(), 1.421);
+}
+
 // An override drop while the tool brakes through a gentle corner's zone for a slower feed after
 // it (seed 23 of RandomProgramsWithCoupledAxesAndLines once σ ran a zone's decreases at their own
 // r, 7.): the feed recovery decelerated at the zone's r for increases and fell behind the feed
