@@ -78,6 +78,12 @@
 //    is what a speed change may use next to the turn at Vg (7.), so the speed may rise there
 //    too: a rule that held it while any corner cap was active pinned it at V_t = A0/2 on
 //    paths whose corner caps overlap (circles of 0.03 mm chords: 1 mm/s for 95 s).
+//    Where the pair at the tool lies on one line (the last step started on it and this one,
+//    even with the line's own r·A0 more, cannot leave it; no filter), the sample at the tool is
+//    a plain speed change along the line: the rise is the line's own r·A0, not the lower r of
+//    a joint zone ahead in the reach (7.'s pairs have their sample within V of the joint).
+//    line-contouring-xz 22.193 → 22.048 s, cam-short-segments 7.215 → 7.154, braid_cut2d
+//    20.076 → 19.884.
 //
 // 5. Feed caps and the override. A feed cap's V is OR·F and OR may change at any cycle, so its
 //    key K = (OR·F)² + 2A0σ(c) depends on OR. We keep one key tree per override *level*
@@ -92,10 +98,14 @@
 //    increase only raises the limits (the geometric caps and the stops, which keep every braking
 //    distance, are OR-independent); an override decrease lowers the feed limit, and the tool then
 //    decelerates at A_seg until it is below it (u ≥ u_prev − r·A0 for the feed part), which the
-//    spec and the checker allow for one ramp. On an arc whose r was set by the normal
-//    acceleration at its top speed, it decelerates at min(A0, √((0.98·g)² − (u²/ρ)²)) for the
-//    current step u instead (more as u falls; inside the tool's segment, no joint zone within
-//    reach, and not with a filter after this type, whose r carry (8.) assumes r).
+//    spec and the checker allow for one ramp. Without a filter at least at σ's mean r over the
+//    step just taken, r̄: the keys of the level before allowed that step, so they allow it less
+//    r̄·A0 now (3. (ii)), and r (the next reach's, 4.) may be below r̄ in a joint zone, whose
+//    decreases σ runs at their own r (7.): decelerating at r·A0 there fell behind them. On an arc
+//    whose r was set by the normal acceleration at its top speed, it decelerates at min(A0,
+//    √((0.98·g)² − (u²/ρ)²)) for the current step u instead (more as u falls; inside the tool's
+//    segment, no joint zone within reach, and not with a filter after this type, whose r carry (8.)
+//    assumes r).
 //
 // 6. Late caps. A block arrives *late* when the interpreter was late: until then the window's
 //    last end point was a stop, and the tool may already be braking for it. Its caps may then
@@ -172,6 +182,18 @@
 //        lattice forms the same: (1/2 − ρ)² ≤ 1/4), and step 1 lies in [j − 2V, j + V].
 //    The zone is part of σ, so every braking plan already accounts for it; a feed limit is
 //    followed exactly (no extra deceleration step) unless the override was just lowered.
+//    Decreases and increases need different vertices: a decrease (u2 < u1, c ∈ [0, u1]) has the
+//    extremes u2·S − u1·E and (u2 − u1)·S, so only |V·(S_i − E_i) − D·S_i| ≤ a_i and D·|S_i|,
+//    D·|E_i| ≤ a_i; an increase (c ∈ [u1 − u2, u1]) only |V·(S_i − E_i) + D·E_i| ≤ a_i and the
+//    same two. Decreases come from the braking bounds and an override decrease (σ's mean r over
+//    step 1, 3. (ii), 5.), the stop's landing bounds and a hold (the lowest r over the reach or
+//    up to the stop, 3., 4.); increases from the reach's r. So without a filter σ takes the
+//    zone's r for decreases alone, r_d = D_dec/A0 ≥ r_j (head_rd_, tail_rd_; at the V the zone
+//    is sized for, V0 or the one lowered to the floor), and r_span() keeps r_j, the lower of
+//    both. On a gentle corner whose turn leans on the speed increase's axis (the decrease
+//    relieves it) r_d is far above the floor: line-contouring-xz's 4.8° corners brake at 0.82
+//    instead of 0.25 × A0 next to the turn (22.348 → 22.193 s), cam-short-segments 7.279 →
+//    7.215, braid_cut2d 20.338 → 20.076.
 //    A zone lowers r on the tail of a (and of up to kZoneWalk earlier short segments) when b
 //    arrives: σ after the first changed segment moves, so the starts of the later segments,
 //    the window's end and the keys of the caps from there on are recomputed with the exact
@@ -231,10 +253,14 @@
 //    that keeps every axis, the tangential and the normal acceleration (and the resultant
 //    option) there, and replaces the joint's cap and its head zone by it for that one step: the
 //    samples after it see plain speed changes along S (b's own r). Kept only when the interval
-//    holds u1 − A0 (every step a cycle may choose lies in [u1 − A0, its bounds]) and the step
-//    stays inside b. The steps before the corner and the crossing step are unchanged, so every
-//    braking plan still holds. Capped corners along a lattice approach put the crossing sample
-//    near j, and the speed then rises by up to A0 at once: zigzag_0.002 22.53 → 20.54 s.
+//    holds u1 − ρ·A0 (every step a cycle may choose lies in [u1 − ρ·A0, its bounds]; ρ as in
+//    11.: the larger of σ's mean r over the crossing step and the r of b's piece at the tool,
+//    what a hold or an override decrease slows by — in this cycle they keep that r, only the
+//    increase gets b's own) and the step stays inside b. The steps before the corner and the
+//    crossing step are unchanged, so every braking plan still holds. Capped corners along a
+//    lattice approach put the crossing sample near j, and the speed then rises by up to A0 at
+//    once: zigzag_0.002 22.53 → 20.54 s. (With u1 − A0 as the lower end, a corner inside its
+//    zone at the floor, r = 0.25, never had an interval: line-contouring-xz's 4.8° corners.)
 //
 // 10. Braking on an arc with what the speed leaves. On an arc whose r was fixed for its top speed
 //    (2.), the braking bounds (3.) decelerate at r·A0 = √(g² − a_n,top²) at every speed, where
@@ -265,35 +291,43 @@
 //    (3.), so a state above the keys' bounds meets no lower r coming into the step's reach there
 //    (with the reach's r: a short arc before the window's end, 0.63 → 0.19 µm/cycle² at once).
 //
-// 11. Centred corners (between two lines, linear axes, no filter, turns ≤ 120°, b ≥ 2·(Vg + A0)).
+// 11. Centred corners (between two lines, linear axes, no filter, turns ≤ 120°, b ≥ Vg + A0).
 //    The joint cap holds the step that lands within Vg before j to Vg as well, because the
 //    crossing after it may split the turn anyhow (9.). With the step u0 landing α before j and
 //    the crossing u1 = α + β, the sample between them has the second difference
 //    (α − u0)·E + β·S: the turn is shared between this sample and the next (9.) as β : α. So u0
 //    may exceed Vg where that sample keeps every limit for every u1 the next cycle may take:
 //      - u1 ≤ Vg: the sample lands in [c, j) = [j − Vg, j), where the cap is active;
-//      - u1 ≥ u0 − r_hi·A0: every bound but this cap's allowed u0 (the step is ≤ the cycle's
+//      - u1 ≥ u0 − ρ·A0: every bound but this cap's allowed u0 (the step is ≤ the cycle's
 //        bound with this cap's key or active leaf left out, the stop's bounds included), so
-//        each allows u0 − (mean r over the step)·A0 next (3. (ii)); a hold or an override
-//        decrease slows by r·A0; r_hi the highest r from the tool to j (a's, or its tail zone's).
+//        each allows u0 − r̄·A0 next, r̄ = Δσ/u0 the mean r over the step (3. (ii); the stop's
+//        landing bounds take the lowest r up to the stop, ≤ r̄); a hold or an override decrease
+//        slows by A0 × the r of the next step's reach, ≤ the r of the piece the step lands in
+//        (an override decrease by at most r̄·A0 more, 5.); ρ the larger (slowdown_r()). (With r_hi,
+//        the highest r from the tool to j, a step from before a tail zone at the floor counted on
+//        slowing by A0 at the sample, and the committing step was never feasible there.)
 //    The limits at the sample: per axis |(α − u0)·E_i + β·S_i| ≤ a_i, tangential |u1 − u0| ≤ A0
 //    (path speeds), the checker's chord normal a_n² = 2·u0·(|d1| − α − β·c) ≤ A0² (c = E·S,
 //    increasing in β), resultant |d1 − d0|² ≤ A0². Each is convex in u1 on u1 ≤ α (no crossing:
 //    a plain speed change) and on u1 ≥ α, so the ends of both pieces decide (centred_ok()). The
 //    sample after the crossing is 9.'s (or, where 9. gives no interval, the cap's Vg as before:
-//    7.'s pair of steps ≤ Vg). The sample stays ≥ 10 nm before j (the checker takes a sample
-//    that close as reaching the joint). The step u0 is the largest feasible one up to that
-//    bound: the per-axis limits with u1 = Vg are linear in u0 (α = j − tool − u0), their
-//    largest u0 first, then a bisection of 6 checks (every answer is checked itself).
+//    7.'s pair of steps ≤ Vg, whatever b's length: the crossing is ≤ Vg as without 11.; b ≥
+//    Vg + A0 keeps it inside b, so d1 = α·E + β·S). The sample stays ≥ 10 nm before j (the
+//    checker takes a sample that close as reaching the joint). The step u0 is the largest
+//    feasible one up to that bound: the per-axis limits with u1 = Vg are linear in u0
+//    (α = j − tool − u0), their largest u0 first, then a bisection of 6 checks (every answer is
+//    checked itself).
 //    One step earlier (the tool ≥ 2·Vg + A0 before j): a step u_{-1} above the cap's bound
 //    (≤ the cycle's bound without it) is taken when from its landing point p0 the slowest next
-//    step, u_{-1} − r_hi·A0, is a feasible centred step (lands in [c, j), limits as above). It is
-//    *committed*: the cycle at p0 takes the largest feasible centred step ≥ that (or the held
-//    step under a hold, if feasible), and every bound but the cap's allows it there by 3. (ii).
+//    step, u_{-1} − ρ·A0 (ρ of that step), is a feasible centred step (lands in [c, j), limits
+//    as above). It is *committed*: the cycle at p0 takes the largest feasible centred step
+//    ≥ that (or the held step under a hold, if feasible), and every bound but the cap's allows
+//    it there by 3. (ii).
 //    The braking lattice of the cap's key lands the tool at c − Vg with Vg + A0; from there the
 //    two steps let it reach the bound's pattern …, V + A0, **V** (centred), V + A0 …
-//    (zigzag_0.002: 20.54 → 18.54 s). Cost: only within 3·Vg + 3·A0 of such a corner, a few
-//    closed forms and two tree updates (the cap's leaf left out and put back).
+//    (zigzag_0.002: 20.54 → 18.54 s; with ρ for r_hi and b ≥ Vg + A0, line-contouring-xz
+//    22.575 → 22.348 s, braid_cut2d 20.526 → 20.338 s). Cost: only within 3·Vg + 3·A0 of such a
+//    corner, a few closed forms and two tree updates (the cap's leaf left out and put back).
 //
 // Without a filter the tool position is the commanded position and at rest means step 0.
 #include "motion/accel_limited.hpp"
@@ -456,6 +490,8 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       head_r_(buffer.capacity(), 1.0),
       tail_mm_(buffer.capacity(), 0.0),
       tail_r_(buffer.capacity(), 1.0),
+      head_rd_(buffer.capacity(), 1.0),
+      tail_rd_(buffer.capacity(), 1.0),
       s0_mm_(buffer.capacity(), 0.0),
       arc_g_(buffer.capacity(), 0.0),
       arc_rho_(buffer.capacity(), 0.0),
@@ -547,13 +583,14 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   s0_mm_[slot] = s.s0_mm;
   head_mm_[slot] = tail_mm_[slot] = 0;
   head_r_[slot] = tail_r_[slot] = 1;
+  head_rd_[slot] = tail_rd_[slot] = 1;
   // Head zones reaching here from earlier segments (8.); expired ones are dropped.
   for (std::size_t k = 0; k < n_carries_;) {
     if (carries_[k].until_mm <= s.s0_mm) {
       carries_[k] = carries_[--n_carries_];
       continue;
     }
-    add_head(slot, carries_[k].until_mm - s.s0_mm, carries_[k].r);
+    add_head(slot, carries_[k].until_mm - s.s0_mm, carries_[k].r, carries_[k].r);
     ++k;
   }
   if (lag_ > 0) {
@@ -900,9 +937,10 @@ void AccelLimitedAccDec::update_r(std::uint64_t index) {
   if (r_zone_.at(slot) != rate) r_zone_.set(slot, rate);
 }
 
-void AccelLimitedAccDec::add_head(std::size_t slot, double mm, double r) {
+void AccelLimitedAccDec::add_head(std::size_t slot, double mm, double r, double r_dec) {
   if (mm <= 0 || r >= 1) return;
   head_r_[slot] = head_mm_[slot] > 0 ? std::min(head_r_[slot], r) : r;
+  head_rd_[slot] = head_mm_[slot] > 0 ? std::min(head_rd_[slot], r_dec) : r_dec;
   head_mm_[slot] = std::max(head_mm_[slot], mm);
 }
 
@@ -1103,8 +1141,8 @@ double AccelLimitedAccDec::seg_sigma(std::size_t slot, double x_mm) const {
     if (hi <= lo) continue;
     const double mid = 0.5 * (pts[k] + pts[k + 1]);
     double rate = r;
-    if (mid < h) rate = std::min(rate, head_r_[slot]);
-    if (mid > t0) rate = std::min(rate, tail_r_[slot]);
+    if (mid < h) rate = std::min(rate, head_rd_[slot]);
+    if (mid > t0) rate = std::min(rate, tail_rd_[slot]);
     out += rate * (hi - lo);
   }
   return out;
@@ -1275,7 +1313,10 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     // the wobble of a line cut into pieces with rounded coordinates, is left to the margins.)
     return (chain_turn.total - std::sqrt(own2)) * corner > 1e-4 * a0_;
   }();
-  auto d_max = [&](double v) {
+  // A decrease (u2 < u1) meets only the first vertex and D·|S_i|, D·|E_i| ≤ a_i (its extremes
+  // over c ∈ [0, u1] are u2·S − u1·E and (u2 − u1)·S), an increase only the second (c ∈
+  // [u1 − u2, u1]: u2·S − u1·E and (u2 − u1)·E): decreases_only gives the decrease's D.
+  auto d_max = [&](double v, bool decreases_only = false) {
     double d = r_hi * a0_;
     if (chained) {
       if (v * chain_turn.total > a0_) return -1.0;
@@ -1296,7 +1337,8 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
         d = std::min(d, std::min(ai, ai + (s[i] > 0 ? t : -t)) / std::abs(s[i]));
       }
       if (std::abs(e[i]) > 1e-12) {
-        d = std::min(d, std::min(ai, ai - (e[i] > 0 ? t : -t)) / std::abs(e[i]));
+        d = std::min(
+            d, (decreases_only ? ai : std::min(ai, ai - (e[i] > 0 ? t : -t))) / std::abs(e[i]));
       }
     }
     return d;
@@ -1334,6 +1376,9 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
       vj = lo;
     }
   }
+  // The speed decreases' D at the speed the zone is sized for (vj: v0, or lowered to the floor;
+  // a smaller V keeps it, convex in V and true at V = 0), ≥ d; chains below lower it too.
+  double d_dec = std::max(d, d_max(vj, true));
   // Two or three corners within one step (a and the segment x before it shorter than the step,
   // on_joint()): a pair of steps may turn from x's end (or the end of the one before x) to b at
   // once while the speed changes. Its zone: d also meets 7.'s vertices for that turn at the
@@ -1361,14 +1406,18 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
       const double dc = chain_d_max(from, s, m, n, vc, r_top * a0_, lim_);
       if (dc >= floor) {
         d = std::min(d, dc);
+        d_dec = std::min(d_dec, dc);
         return;
       }
       const double vf = chain_speed_pc(from, s, m, n, floor, lim_);
       if (vf > mid_mm) {
         zone_chain_vg_ = std::min(zone_chain_vg_, vf);
-        d = std::min(d, std::max(floor, chain_d_max(from, s, m, n, vf, r_top * a0_, lim_)));
+        const double df = std::max(floor, chain_d_max(from, s, m, n, vf, r_top * a0_, lim_));
+        d = std::min(d, df);
+        d_dec = std::min(d_dec, df);
       } else {
         zone_chain_vg_ = std::min(zone_chain_vg_, mid_mm);
+        d_dec = d;  // (each corner's own zone: the joint's d)
       }
     };
     if (!straight_joint(prev_.end_dir, a_start)) {
@@ -1409,6 +1458,8 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   zone_s_ = s;
   zone_a_start_ = a_start;
   const double rj = std::max(d / a0_, 1e-6);
+  // σ's r (decreases, 3. (ii)): without a filter only (with one, the output averages both).
+  const double rjd = lag_ == 0 ? std::max(rj, d_dec / a0_) : rj;
   // Every step within V of the joint is ≤ V: the joint cap's Vg when there is one, else the
   // segments' caps.
   const double v = std::min(cap_v < 0.999 * around ? cap_v : around, v_feed);
@@ -1438,7 +1489,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
       check_stop(b.end_mm(), a.end_mm(), std::min(rj, ratio_[slot_b]));
     }
   }
-  if (rj >= r_top) return;  // the segments' own r already fits
+  if (rj >= r_top) return;  // the segments' own r already fits (rjd ≥ rj)
   // The zone [j − 2V, j] may reach back over several short segments (at most kZoneWalk): each
   // gets it as (part of) its tail zone. Never under or behind the tool (σ there is in use; a
   // late joint, see 6.).
@@ -1456,17 +1507,20 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     if (x.end_mm() <= zone_start) break;
     const std::size_t sx = buf_.slot(k);
     const double covered = x.end_mm() - std::max(zone_start, x.s0_mm);
-    if (tail_mm_[sx] > 0)
+    if (tail_mm_[sx] > 0) {
       tail_r_[sx] = std::min(tail_r_[sx], rj);
-    else
+      tail_rd_[sx] = std::min(tail_rd_[sx], rjd);
+    } else {
       tail_r_[sx] = rj;
+      tail_rd_[sx] = rjd;
+    }
     tail_mm_[sx] = std::max(tail_mm_[sx], covered);
     update_r(k);
     first = k;
     ++walked;
   }
   const double head = (1 + lag_) * v;
-  add_head(slot_b, std::min(b.length_mm, head), rj);
+  add_head(slot_b, std::min(b.length_mm, head), rj, rjd);
   if (lag_ > 0 && head > b.length_mm) carry(a.end_mm() + head, rj);
   if (first > index_a) return;
   // σ after the first changed segment moved: the starts of the later ones, the end of the
@@ -1670,6 +1724,13 @@ double AccelLimitedAccDec::after_corner() {
   const double alpha = j - x.from_mm, beta = pos_mm_ - j, u1 = alpha + beta;
   const double amax = kMargin * a0_;
   double lo = u1 - a0_, hi = u1 + amax;
+  // The slowest step this cycle may take: u1 − ρ·A0, ρ the larger of the mean r over the
+  // crossing (every braking bound allowed u1, 3. (ii)) and the r of b's piece at the tool (a
+  // hold or an override decrease: step() keeps the zone's r for them in this cycle), as 11.
+  const double rho = std::min(
+      1.0,
+      std::max((sigma0_[sb] + seg_sigma(sb, beta) - x.sigma_from) / u1, piece_r(sb, beta)) + 1e-12);
+  const double slowest = u1 - rho * a0_;
   for (std::size_t i = 0; i < 3; ++i) {
     if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
     const double ai = kMargin * lim_.axis_amax_pc2[i];
@@ -1701,9 +1762,9 @@ double AccelLimitedAccDec::after_corner() {
   // a faster step out of this one measured slower on the whole, 13.07 → 13.24 s on
   // circle_small_segments.)
   if (b.end_mm() - pos_mm_ < u1 + a0_) return kInf;
-  // Every step the cycle may choose lies in [u1 − A0, the bounds]: the interval must hold its
+  // Every step the cycle may choose lies in [u1 − ρ·A0, the bounds]: the interval must hold its
   // lower end, or the cap stays.
-  if (!(lo <= u1 - a0_ && hi >= lo)) return kInf;
+  if (!(lo <= slowest && hi >= lo)) return kInf;
   clear(cap_pos);
   return hi;
 }
@@ -1725,9 +1786,33 @@ bool AccelLimitedAccDec::centre_setup(std::size_t g, const Segment& a, const Seg
   // r there), and a hold or an override decrease slows by r·A0. r_hi: the highest r over
   // [tool, j] (a's, or its tail zone's when the tool is inside it).
   const std::size_t sa = buf_.slot(cur_);
+  ct.slot_a = sa;
+  ct.a_s0 = a.s0_mm;
   ct.r_hi = ratio_[sa];
   if (pos_mm_ - a.s0_mm >= a.length_mm - tail_mm_[sa]) ct.r_hi = std::min(ct.r_hi, tail_r_[sa]);
+  ct.r_lo = tail_mm_[sa] > 0 ? std::min(ratio_[sa], tail_r_[sa]) : ratio_[sa];
   return true;
+}
+
+double AccelLimitedAccDec::piece_r(std::size_t slot, double x_mm) const {
+  // r_span() from here: the head's r while x < h, the tail's once the span reaches L − t.
+  double rate = ratio_[slot];
+  if (x_mm < head_mm_[slot]) rate = std::min(rate, head_r_[slot]);
+  if (tail_mm_[slot] > 0 && x_mm >= len_mm_[slot] - tail_mm_[slot]) {
+    rate = std::min(rate, tail_r_[slot]);
+  }
+  return rate;
+}
+
+double AccelLimitedAccDec::slowdown_r(std::size_t slot, double s0, double from_mm,
+                                      double to_mm) const {
+  // A step x ≤ every braking bound lets the next one be ≥ x − r̄·A0, r̄ = Δσ/x the mean r over
+  // the step (3. (ii); the stop's lattice too, and its landing bounds take the lowest r up to
+  // the stop, ≤ r̄). A hold or an override decrease slows by A0 × the r of the next step's
+  // reach, ≤ the r of the piece it starts in. (1e-12: roundings of σ.)
+  const double x0 = from_mm - s0, x1 = to_mm - s0;
+  const double mean = x1 > x0 ? (seg_sigma(slot, x1) - seg_sigma(slot, x0)) / (x1 - x0) : 1.0;
+  return std::min(1.0, std::max(mean, piece_r(slot, x1)) + 1e-12);
 }
 
 bool AccelLimitedAccDec::centred_ok(const Centre& ct, double from_mm, double u0) const {
@@ -1762,7 +1847,8 @@ bool AccelLimitedAccDec::centred_ok(const Centre& ct, double from_mm, double u0)
   const double alpha = ct.j - p1;
   // (Not within 10 nm of j: the checker takes a sample that close as reaching the joint.)
   if (!(alpha >= kMinAlphaMm) || p1 < ct.c_mm || u0 - vg > amax) return false;
-  const double lo = std::max(0.0, std::min(vg, u0 - ct.r_hi * a0_));
+  const double rho = slowdown_r(ct.slot_a, ct.a_s0, from_mm, p1);
+  const double lo = std::max(0.0, std::min(vg, u0 - rho * a0_));
   if (!sample_ok(alpha, vg) || !sample_ok(alpha, lo)) return false;
   return !(alpha > lo && alpha < vg) || sample_ok(alpha, alpha);
 }
@@ -1794,17 +1880,24 @@ double AccelLimitedAccDec::committing_step(const Centre& ct, double u, double hi
                                            double& lo_next) const {
   // The step u_{-1} to p0 may exceed the cap's braking bound when from p0 the centred step
   // lo_next = u_{-1} − r_hi·A0 (the slowest the cycle at p0 can be made to go) is feasible.
+  // lo_next = u_{-1} − ρ·A0 (the slowest the cycle at p0 can be made to go, ρ = slowdown_r()
+  // of the step) is feasible.
+  auto slowest = [&](double x) {
+    return x - slowdown_r(ct.slot_a, ct.a_s0, pos_mm_, pos_mm_ + x) * a0_;
+  };
   auto ok = [&](double x) {
-    const double l = x - ct.r_hi * a0_;
+    const double l = slowest(x);
     return l > 0 && ct.j - (pos_mm_ + x) > ct.vg && centred_ok(ct, pos_mm_ + x, l);
   };
-  // The same per-axis limits from p0 = tool + x with u0 = x − r_hi·A0: α − u0 = D + 2·r_hi·A0
-  // − 3x, Vg − α = Vg − D − r_hi·A0 + 2x.
-  const double d = ct.j - pos_mm_, ra = ct.r_hi * a0_;
-  hi = std::min(hi, centred_top(ct, -3, 2, d + 2 * ra, ct.vg - d - ra));
+  // The same per-axis limits from p0 = tool + x with u0 = x − ρ·A0: α − u0 = D + 2·ρ·A0 − 3x,
+  // Vg − α = Vg − D − ρ·A0 + 2x; ρ between the lowest and the highest r up to j (a search
+  // bound only: every answer is checked).
+  const double d = ct.j - pos_mm_;
+  auto top = [&](double ra) { return centred_top(ct, -3, 2, d + 2 * ra, ct.vg - d - ra); };
+  hi = std::min(hi, std::max(top(ct.r_hi * a0_), top(ct.r_lo * a0_)));
   if (!(hi > u)) return u;
   const double best = largest_ok(u, hi, ok);
-  if (best > u) lo_next = best - ct.r_hi * a0_;
+  if (best > u) lo_next = slowest(best);
   return best;
 }
 
@@ -1853,6 +1946,8 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   std::size_t recover_arc = buf_.capacity();
   // The tool's arc whose braking bounds may follow its speed (10.); none: capacity.
   std::size_t brake_arc = buf_.capacity();
+  // The rise where the pair at the tool is a plain speed change along its line (0: none).
+  double line_rise = 0;
   if (!buf_.empty() && cur_ < buf_.end_index() && buf_[cur_].kind == ItemKind::kMotion) {
     const Segment& s = buf_[cur_];
     const std::size_t slot = buf_.slot(cur_);
@@ -1868,9 +1963,20 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     }
     const double r_reach = r_span(pos_mm_, reach, &reach_skip_);
     r = r_reach;
+    // The last step started on this line and this one cannot leave it: the sample at the tool
+    // turns nothing, so its speed may rise by the line's own r (a joint zone ahead within the
+    // reach lowers r for the pairs whose sample is near the joint, 7.; no filter: 8. averages).
+    if (lag_ == 0 && !s.arc && pos_mm_ - step_ >= s.s0_mm &&
+        pos_mm_ + step_ + ratio_[slot] * a0_ < s.end_mm()) {
+      line_rise = ratio_[slot] * a0_;
+    }
     // Past the corner just crossed, its head zone (7.) is replaced by the exact limit: within
     // b before its tail zone, b's own r.
-    if (after < kInf && reach < s.end_mm() - tail_mm_[slot]) r = ratio_[slot];
+    // (Not for a hold or an override decrease: after_corner() counted on the zone's r for them.)
+    if (after < kInf && reach < s.end_mm() - tail_mm_[slot] && !in.hold && !feed_recover_ &&
+        !(in.or_ratio < prev_or_)) {
+      r = ratio_[slot];
+    }
     // Both steps of the pair inside the arc: the step before started in it too (a pair across
     // the joint before the arc is the joint zone's, 7., which counts on r).
     if (lag_ == 0 && arc_g_[slot] > 0 && reach < s.end_mm() && pos_mm_ - step_ >= s.s0_mm &&
@@ -1938,6 +2044,7 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     const double g = kRecoverShare * arc_g_[slot];
     rise = std::max(a, std::min(most, std::sqrt(std::max(0.0, g * g - an * an))));
   }
+  rise = std::max(rise, line_rise);
   double u = in.hold ? step_ - a : step_ + rise;
   // Geometric caps and stops are hard limits, and so is the feed limit while the override has
   // not been lowered (following its bound needs no more than the deceleration of the zone just
@@ -1956,6 +2063,13 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     const double g = kRecoverShare * arc_g_[slot];
     const double at = std::sqrt(std::max(0.0, g * g - an * an));
     a_recover = std::max(a, std::min({a0_, lin_r_[slot] * a0_, at}));
+  }
+  // At least σ's mean r over the step just taken (no filter): the feed keys of the level before
+  // the decrease allowed it, so they allow it less that mean·A0 now (3. (ii)). Decelerating at
+  // a alone (the r over the next step's reach, lower in a joint zone than σ's r for decreases,
+  // 7.) fell behind them: 50.26 mm/s at a 50 mm/s feed (RandomProgramsWithCoupledAxesAndLines).
+  if (feed_recover_ && lag_ == 0 && step_ > 0) {
+    a_recover = std::max(a_recover, std::clamp((sigma_p - prev_sigma_) / step_, 0.0, 1.0) * a0_);
   }
   const double feed = feed_recover_ ? std::max(step_ - a_recover, feed_limit) : feed_limit;
   // (Nested: an initializer list became a loop over a stack array; the same double, the first
@@ -2058,7 +2172,7 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     if (sa.kind == ItemKind::kMotion && sb.kind == ItemKind::kMotion && !sa.arc && !sb.arc &&
         sb.s0_mm == j && pos_mm_ - step_ >= sa.s0_mm && pos_mm_ + u < j &&
         std::abs(cap.c_mm + cap.v - j) <= 1e-9 * std::max(1.0, std::abs(j)) &&
-        sb.length_mm >= 2 * (cap.v + a0_) && centre_setup(cg, sa, sb, ct)) {
+        sb.length_mm >= cap.v + a0_ && centre_setup(cg, sa, sb, ct)) {
       const double first = in.hold ? step_ - a : step_ + rise;
       // The cycle's bound with this joint's cap left out (its key or its active leaf: two tree
       // updates), the stop's bounds included; above `want` it may answer min(bound, want).
@@ -2129,7 +2243,7 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     const Segment& s = buf_[cur_];
     if (s.kind == ItemKind::kMotion && !s.arc && pos_mm_ >= s.s0_mm && pos_mm_ < s.end_mm() &&
         pos_mm_ + u >= s.end_mm()) {
-      crossed_ = {true, s.end_mm(), pos_mm_, s.end_direction()};
+      crossed_ = {true, s.end_mm(), pos_mm_, sigma_p, s.end_direction()};
     }
   }
   if (u > 0 && u >= to_stop) {
@@ -2137,6 +2251,7 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
   } else {
     pos_mm_ += u;
   }
+  prev_sigma_ = sigma_p;
   step_ = u;
   if (!jerk_on_) {
     tool_mm_ = pos_mm_;

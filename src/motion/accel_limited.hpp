@@ -124,9 +124,18 @@ class AccelLimitedAccDec final : public AccDec {
   // 11. Centred corners: the joint (j, Vg, the cap's c), the directions and their cosine, and
   // the highest r from the tool up to j.
   struct Centre {
-    double vg = 0, j = 0, c_mm = 0, c = 0, r_hi = 1;
+    double vg = 0, j = 0, c_mm = 0, c = 0, r_hi = 1, r_lo = 1;
+    std::size_t slot_a = 0;  // a's buffer slot, and its start
+    double a_s0 = 0;
     AxisVec e, sd;
   };
+  // The slowest step the cycle after a step [from, to] on the line in `slot` (start s0) can be
+  // made to take is that step less ρ·A0 (11.): ρ = the larger of the mean r over the step and
+  // the r of the piece at `to`.
+  double slowdown_r(std::size_t slot, double s0, double from_mm, double to_mm) const;
+  // The r of the piece of the segment in `slot` at x mm from its start, as r_span() takes it for
+  // a span starting there (≥ the r of a step's reach from there: what a hold slows by).
+  double piece_r(std::size_t slot, double x_mm) const;
   bool centre_setup(std::size_t g, const planner::Segment& a, const planner::Segment& b,
                     Centre& ct) const;
   // The step u0 from from_mm lands in [c, j) and its sample keeps every limit for each crossing
@@ -144,8 +153,9 @@ class AccelLimitedAccDec final : public AccDec {
     bool valid = false;
     double j_mm = 0, from_mm = 0, lo = 0;
   } commit_;
-  // Lowers r over the first `mm` of the segment in `slot` to at most `r` (head zone).
-  void add_head(std::size_t slot, double mm, double r);
+  // Lowers r over the first `mm` of the segment in `slot` to at most `r` (head zone), and σ's r
+  // for decreases to at most `r_dec` (≥ r).
+  void add_head(std::size_t slot, double mm, double r, double r_dec);
   // A head zone that reaches past the segment it starts in (8.): r ≤ `r` up to path position
   // `until_mm`, applied to each later segment as it arrives.
   void carry(double until_mm, double r);
@@ -184,8 +194,9 @@ class AccelLimitedAccDec final : public AccDec {
   // Per buffer slot: σ at the segment start, acceleration ratio r = A_seg/A0, speed cap.
   Buf<double> sigma0_, ratio_, vcap_;
   // Per buffer slot: the joint zones (see 7.): r ≤ head_r_ on the first head_mm_, ≤ tail_r_ on
-  // the last tail_mm_ of the segment.
-  Buf<double> len_mm_, head_mm_, head_r_, tail_mm_, tail_r_;
+  // the last tail_mm_ of the segment (r_span(): speed increases, holds, the stops' landing);
+  // head_rd_ and tail_rd_ ≥ them are the zones' r for decreases (σ, the braking bounds).
+  Buf<double> len_mm_, head_mm_, head_r_, tail_mm_, tail_r_, head_rd_, tail_rd_;
   Buf<double> s0_mm_;  // the segment's s0_mm (r_span() reads it without the Segment)
   // Per buffer slot, arcs whose plane axes share normal and tangential acceleration: the axis
   // bound g (0: none), the radius of curvature, and the ratio of the linear axis shares alone —
@@ -254,7 +265,7 @@ class AccelLimitedAccDec final : public AccDec {
   // The last step left the line under the tool at its end j_mm (direction e there): 9.
   struct Crossed {
     bool valid = false;
-    double j_mm = 0, from_mm = 0;
+    double j_mm = 0, from_mm = 0, sigma_from = 0;  // (σ at from_mm)
     AxisVec e;
   } crossed_;
 
@@ -262,6 +273,7 @@ class AccelLimitedAccDec final : public AccDec {
   std::uint64_t cur_skip_ = 0;    // items advance_current() skipped when it last left an item
   std::uint64_t reach_skip_ = 0;  // items from cur_ to the item of the last step's reach
   double pos_mm_ = 0, step_ = 0, last_bound_ = 0;
+  double prev_sigma_ = 0;  // σ where the last step started
   double cached_stop_mm_ = -1, cached_stop_sigma_ = 0;
   double prev_or_ = 0;         // the override of the last cycle
   bool feed_recover_ = false;  // lowered override: above the feed limit, decelerating to it

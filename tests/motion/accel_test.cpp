@@ -770,5 +770,147 @@ TEST(AccelLimited, CentredCornersUnderAHoldOrAnOverrideDropAtEveryCycle) {
   }
 }
 
+// Centred corners inside joint zones (accel_limited.cpp 11., 9.): line-contouring-xz's gentle
+// polyline in XZ (1.33 mm chords turning 4.8°, every axis at Amax, F 10 000). Each corner is
+// capped (Vg ≈ 23 mm/s) and its zone at the floor (r = 0.25 over [j − 2V, j + V]). The slowest
+// step after the committing, the centred and the crossing step is that step less ρ·A0, ρ the
+// mean r over the step (or the r where it lands, for a hold): with r_hi = 1 (a's r) instead,
+// the committing step and 9.'s step after the crossing were never feasible there.
+Prog contour_polyline(int segments, double turn_deg, double chord_mm) {
+  Prog p;
+  Vec3 at{0, 0, 0};
+  double phi = 0;
+  for (int i = 0; i < segments; ++i) {
+    at = at + chord_mm * Vec3{std::sin(phi), 0, std::cos(phi)};
+    p.line_to(at, 10000);
+    phi += turn_deg * kPi / 180;
+  }
+  return p;
+}
+
+TEST(AccelLimited, CentredCornersInsideJointZonesPassAPolylineFaster) {
+  const MachineConfig m = centred_machine();
+  const RunResult r = run_checked(m, contour_polyline(12, 4.8, 1.33));
+  std::printf("polyline of 12 chords turning 4.8°: %.3f s\n", r.time_s());
+  // 0.437 s with r_hi = 1 (438 cycles), 0.431 s with ρ (432 cycles).
+  EXPECT_LE(r.time_s(), 0.433);
+}
+
+TEST(AccelLimited, CentredCornersInsideJointZonesUnderAHoldOrAnOverrideDropAtEveryCycle) {
+  const MachineConfig m = centred_machine();
+  const Prog p = contour_polyline(5, 4.8, 1.33);
+  // The second corner (2.66 mm) is crossed near 0.073 s: start the hold or the drop at each
+  // cycle of its approach and of the cycles after it.
+  for (int k = 55; k <= 80; ++k) {
+    const double t = 0.001 * k;
+    RunOpts h = accel_opts();
+    h.hold_steps = {{t, true}, {t + 0.03, false}};
+    run_checked(m, p, h);
+    RunOpts o = accel_opts();
+    o.override_steps = {{t, 30}};
+    run_checked(m, p, o);
+    RunOpts up = accel_opts();
+    up.override_steps = {{0.0, 50}, {t, 100}};
+    run_checked(m, p, up);
+  }
+}
+
+// cam-short-segments' rosette r = 30 + 6·sin(6φ) mm, two lobes in 400 chords of 0.13–0.2 mm at
+// F 6 000 after a 30 mm line (every axis at Amax): the tool brakes and speeds up through the
+// joint zones of its 0.5–4° corners. 1.441 s before session 10; 1.430 s once σ ran the zones'
+// decreases at their own r (7.); 1.418 s with the line's own r for the rise where the pair at
+// the tool lies on one line (4.).
+TEST(AccelLimited, RosetteOfShortChordsBrakesAndRisesAtTheZonesOwnLimits) {
+  const MachineConfig m = centred_machine();
+  Prog p;
+  for (int k = 0; k <= 400; ++k) {
+    const double phi = 2 * kPi * k / 1200, r = 30 + 6 * std::sin(6 * phi);
+    p.line_to(Vec3{r * std::cos(phi), r * std::sin(phi), 0}, 6000);
+  }
+  const RunResult r = run_checked(m, p);
+  std::printf("rosette of 400 chords: %.3f s\n", r.time_s());
+  EXPECT_LE(r.time_s(), 1.421);
+}
+
+// An override drop while the tool brakes through a gentle corner's zone for a slower feed after
+// it (seed 23 of RandomProgramsWithCoupledAxesAndLines once σ ran a zone's decreases at their own
+// r, 7.): the feed recovery decelerated at the zone's r for increases and fell behind the feed
+// keys of the level before, 50.26 mm/s on a 50 mm/s line. It now decelerates at least at σ's mean
+// r over the step just taken.
+TEST(AccelLimited, OverrideDropInsideAJointZoneKeepsTheFeedOfTheLevelBefore) {
+  const MachineConfig m = coupled_machine(2600, 2000, 2600, 4);
+  Prog p;
+  p.line_to(Vec3{-4.865, -4.28, -1.255}, 8000, PathMode::kExactPath);
+  p.line_to(Vec3{-9.63, -8.77, -2.59}, 3000, PathMode::kExactStop);
+  RunOpts o = accel_opts();
+  o.override_steps = {{0.068, 50.0}, {2.5, 100.0}};
+  const RunResult r = run(m, p.blocks, o);
+  auto lim = testing::limits_from_config(m);
+  lim.override_ramp_s = 20000 * 1.5 / 60 / (0.31 * 600) + 0.002;
+  const auto rep = testing::check_trajectory(r.traj, p.blocks, lim);
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+}
+
+// Random polylines of lines only (turns 0.5–120°, chords 0.02–3 mm, in random planes) on coupled
+// axes, with random override steps and feed holds: many capped corners with zones, where 11.
+// (committing and centred steps) and 9. (the step after the crossing) apply. P1–P5 by the
+// checker.
+RC_GTEST_PROP(AccelLimited, RandomPolylinesWithCentredCorners, ()) {
+  MachineConfig m = test_machine();
+  for (std::size_t i = 0; i < 3; ++i) {
+    m.axes[i].max_accel_mm_s2 = *rc::gen::element(600.0, 1400.0, 2000.0, 2000.0, 2600.0);
+  }
+  m.lookahead_blocks = *rc::gen::inRange(4, 40);
+  auto unit = [](Vec3 v) { return (1.0 / norm(v)) * v; };
+  auto rnd = [] { return (*rc::gen::inRange(-1000, 1001)) / 1000.0; };
+  Vec3 d = unit(Vec3{rnd(), rnd(), rnd()} + Vec3{1e-3, 0, 0});
+  Prog p;
+  const int n = *rc::gen::inRange(2, 16);
+  const double feed = *rc::gen::element(3000.0, 8000.0, 10000.0, 20000.0);
+  for (int i = 0; i < n; ++i) {
+    const double len = *rc::gen::element(0.02, 0.05, 0.1, 0.3, 1.0, 3.0) *
+                       (0.5 + (*rc::gen::inRange(0, 1001)) / 1000.0);
+    p.line_to(p.pos.xyz() + len * d, feed);
+    // The next direction: d turned by θ towards a random perpendicular.
+    const double theta = (*rc::gen::element(0.5, 2.0, 5.0, 15.0, 45.0, 90.0, 120.0)) * kPi / 180;
+    Vec3 w{rnd(), rnd(), rnd()};
+    w = w - dot(w, d) * d;
+    if (norm(w) < 1e-3) w = std::abs(d.x) < 0.9 ? Vec3{1, 0, 0} - d.x * d : Vec3{0, 1, 0} - d.y * d;
+    d = unit(std::cos(theta) * d + std::sin(theta) * unit(w));
+  }
+  RunOpts o = accel_opts();
+  o.max_cycles = 2'000'000;
+  const int steps = *rc::gen::inRange(0, 4);
+  for (int i = 0; i < steps; ++i) {
+    o.override_steps.emplace_back((*rc::gen::inRange(0, 300)) / 1000.0,
+                                  *rc::gen::element(10.0, 30.0, 50.0, 100.0, 150.0));
+  }
+  std::sort(o.override_steps.begin(), o.override_steps.end());
+  if (!o.override_steps.empty()) o.override_steps.emplace_back(0.5, 100.0);
+  if (*rc::gen::element(false, false, true)) {
+    const double t = (*rc::gen::inRange(0, 300)) / 1000.0;
+    o.hold_steps = {{t, true}, {t + 0.05, false}};
+  }
+  const RunResult r = run(m, p.blocks, o);
+  auto lim = testing::limits_from_config(m);
+  // After an override decrease the speed falls at the segment's rate, down to 600 mm/s² (as
+  // random_program_with_coupled_axes()).
+  lim.override_ramp_s = 20000 * 1.5 / 60 / 600 + 0.002;
+  const auto rep = testing::check_trajectory(r.traj, p.blocks, lim);
+  if (!rep.ok()) {
+    RC_LOG() << rep.summary() << " buffer " << m.lookahead_blocks << " axes "
+             << m.axes[0].max_accel_mm_s2 << " " << m.axes[1].max_accel_mm_s2 << " "
+             << m.axes[2].max_accel_mm_s2 << "\n";
+    for (const Block& b : p.blocks) {
+      RC_LOG() << std::setprecision(17) << "(" << b.end[0] << "," << b.end[1] << "," << b.end[2]
+               << ") F " << b.feed_mm_min << "\n";
+    }
+  }
+  RC_ASSERT(rep.ok());
+  RC_ASSERT(r.mismatches == 0u);
+  for (std::size_t i = 0; i < 3; ++i)
+    RC_ASSERT(std::abs(r.samples.back().position[i] - p.pos[i]) <= 1e-9);
+}
+
 }  // namespace
 }  // namespace cncore::motion::test
