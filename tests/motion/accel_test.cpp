@@ -751,15 +751,14 @@ TEST(AccelLimited, CentredCornersPassAZigZagFaster) {
   EXPECT_LE(r.time_s(), 0.380);
 }
 
-TEST(AccelLimited, CentredCornersUnderAHoldOrAnOverrideDropAtEveryCycle) {
-  const MachineConfig m = centred_machine();
-  const Prog p = centred_zigzag(6);
-  // The third corner is crossed near 0.03 s: start the hold or the drop at each cycle of
-  // [0.020, 0.036] s (its approach, the committing and the centred step among them).
-  for (int k = 20; k <= 36; ++k) {
+// A feed hold (released after hold_s), an override drop to 30 % and a rise from 50 % to 100 %,
+// each started at every cycle k0 … k1 (ms): every run keeps P1–P4 and ends at the program's end.
+void hold_drop_rise_at_every_cycle(const MachineConfig& m, const Prog& p, int k0, int k1,
+                                   double hold_s) {
+  for (int k = k0; k <= k1; ++k) {
     const double t = 0.001 * k;
     RunOpts h = accel_opts();
-    h.hold_steps = {{t, true}, {t + 0.02, false}};
+    h.hold_steps = {{t, true}, {t + hold_s, false}};
     run_checked(m, p, h);
     RunOpts o = accel_opts();
     o.override_steps = {{t, 30}};
@@ -768,6 +767,14 @@ TEST(AccelLimited, CentredCornersUnderAHoldOrAnOverrideDropAtEveryCycle) {
     up.override_steps = {{0.0, 50}, {t, 100}};
     run_checked(m, p, up);
   }
+}
+
+TEST(AccelLimited, CentredCornersUnderAHoldOrAnOverrideDropAtEveryCycle) {
+  const MachineConfig m = centred_machine();
+  const Prog p = centred_zigzag(6);
+  // The third corner is crossed near 0.03 s: start the hold or the drop at each cycle of
+  // [0.020, 0.036] s (its approach, the committing and the centred step among them).
+  hold_drop_rise_at_every_cycle(m, p, 20, 36, 0.02);
 }
 
 // Centred corners inside joint zones (accel_limited.cpp 11., 9.): line-contouring-xz's gentle
@@ -801,18 +808,7 @@ TEST(AccelLimited, CentredCornersInsideJointZonesUnderAHoldOrAnOverrideDropAtEve
   const Prog p = contour_polyline(5, 4.8, 1.33);
   // The second corner (2.66 mm) is crossed near 0.073 s: start the hold or the drop at each
   // cycle of its approach and of the cycles after it.
-  for (int k = 55; k <= 80; ++k) {
-    const double t = 0.001 * k;
-    RunOpts h = accel_opts();
-    h.hold_steps = {{t, true}, {t + 0.03, false}};
-    run_checked(m, p, h);
-    RunOpts o = accel_opts();
-    o.override_steps = {{t, 30}};
-    run_checked(m, p, o);
-    RunOpts up = accel_opts();
-    up.override_steps = {{0.0, 50}, {t, 100}};
-    run_checked(m, p, up);
-  }
+  hold_drop_rise_at_every_cycle(m, p, 55, 80, 0.03);
 }
 
 // cam-short-segments' rosette r = 30 + 6·sin(6φ) mm, two lobes in 400 chords of 0.13–0.2 mm at
