@@ -496,10 +496,10 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       arc_g_(buffer.capacity(), 0.0),
       arc_rho_(buffer.capacity(), 0.0),
       lin_r_(buffer.capacity(), 1.0),
-      pool_(buffer.capacity() + 1),
+      pool_(buffer.capacity() + kOverflow),
       caps_(3 * pool_, Cap{}),
       state_(3 * pool_, State::kEmpty),
-      owner_(3 * buffer.capacity() + 3, kNone),
+      owner_(3 * (buffer.capacity() + kOverflow), kNone),
       where_(3 * pool_, kNone),
       free_(3 * pool_),
       entry_(3 * pool_),
@@ -787,26 +787,59 @@ void AccelLimitedAccDec::on_retire(std::uint64_t index) {
 bool AccelLimitedAccDec::detach(std::uint64_t index) {
   // The caps of a segment the tool has passed are active ones (their range started behind the
   // tool) whose range reaches past it: a joint cap [j − Vg, j + Vg) over segments shorter than
-  // Vg. Merged into the overflow slot of their kind (3·capacity + k, so that slot % 3 still
-  // tells a joint cap) as min V over [.., max e): stricter than each, so every cap still holds.
+  // Vg, or any cap widened by lag·V with a filter (8.). They move to the overflow positions of
+  // their kind (3·(capacity + i) + k, so that pos % 3 still tells a joint cap), kept as a set
+  // where none dominates another (lower V and later end); a cap dominated by one there is
+  // dropped, and with all kOverflow taken it merges with the one of the nearest V as
+  // (min V, max e): stricter than each, so every cap still holds. (A single merged position
+  // ran a 103 mm helix at the 1 mm/s of a 1 µm F60 line before it: a rapid's feed cap, widened
+  // by 200 cycles × 2 × 0.25 mm to 100 mm, took line's V; T2 = 200, lookahead 8, G61.)
   const std::size_t s = 3 * buf_.slot(index);
   for (std::size_t k = 0; k < 3; ++k) {
     if (pos_state(s + k) == State::kApproaching) return false;
   }
   for (std::size_t k = 0; k < 3; ++k) {
     if (pos_state(s + k) != State::kActive) continue;
-    const std::size_t o = overflow_ + k;
-    if (pos_state(o) == State::kActive) {
-      const Cap cap = caps_[owner_[s + k]];
+    const Cap cap = caps_[owner_[s + k]];
+    constexpr std::size_t kNoPos = ~std::size_t{0};
+    std::size_t free_pos = kNoPos;
+    std::size_t nearest = kNoPos;
+    double nearest_ratio = -1;
+    bool dominated = false;
+    for (std::size_t i = 0; i < kOverflow; ++i) {
+      const std::size_t o = overflow_ + 3 * i + k;
+      if (pos_state(o) != State::kActive) {
+        free_pos = o;
+        continue;
+      }
+      const Cap& x = caps_[owner_[o]];
+      if (x.v <= cap.v && x.e_mm >= cap.e_mm) {
+        dominated = true;
+        break;
+      }
+      if (cap.v <= x.v && cap.e_mm >= x.e_mm) {
+        clear(o);
+        free_pos = o;
+        continue;
+      }
+      const double ratio = std::min(x.v, cap.v) / std::max(x.v, cap.v);
+      if (ratio > nearest_ratio) {
+        nearest_ratio = ratio;
+        nearest = o;
+      }
+    }
+    if (dominated) {
       clear(s + k);
-      const std::size_t g = owner_[o];
+    } else if (free_pos != kNoPos) {
+      move(s + k, free_pos);  // active, its trees unchanged
+    } else {
+      clear(s + k);
+      const std::size_t g = owner_[nearest];
       Cap& merged = caps_[g];
       merged.v = std::min(merged.v, cap.v);
       merged.e_mm = std::max(merged.e_mm, cap.e_mm);
       (merged.feed ? active_feed_ : active_geo_).set(g, merged.v);
       release_.set(g, merged.e_mm);
-    } else {
-      move(s + k, o);  // active, its trees unchanged
     }
   }
   return true;

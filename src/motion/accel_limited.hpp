@@ -239,7 +239,9 @@ class AccelLimitedAccDec final : public AccDec {
     return v * v + feed_k_[i];
   }
   void update_feed_group(std::size_t i);
-  // Positions 3·capacity + k (k = 0, 1, 2): active caps of retired segments, merged (detach()).
+  // Positions 3·(capacity + i) + k (k = 0, 1, 2; i < kOverflow): active caps of retired
+  // segments (detach()).
+  static constexpr std::size_t kOverflow = 8;
   std::size_t overflow_;
   planner::MinTree r_zone_;  // by buffer slot, see update_r()
 

@@ -7,12 +7,15 @@
 #include <rapidcheck.h>
 #include <rapidcheck/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <numbers>
 
 #include "limits.hpp"
 #include "motion_test_util.hpp"
+#include "path_geometry.hpp"
 #include "program_gen_rc.hpp"
 #include "trajectory_checker.hpp"
 
@@ -168,8 +171,19 @@ RC_GTEST_PROP(AccelFilter, RandomProgramsKeepEveryLimit, ()) {
   // with the 1 000-block window and a slow program of ~3 M cycles one case took minutes (a
   // random seed then ran past ctest's timeout); the small windows keep the cross-check.
   o.kernel.check_reference_walk = m.lookahead_blocks <= 40;
-  o.max_cycles = 3'000'000;
   o.override_steps = *testing::gen::override_steps(2.0);
+  // Back to 100 % after the random steps, and a cycle cap from the feed time at 100 %: a helix
+  // of two 32 mm turns at F60 left at 15.7 % needs ~2 600 s, which ran past a fixed 3 M-cycle
+  // cap (reported as a P4 end-point violation; RapidCheck then shrank it for many minutes).
+  o.override_steps.emplace_back(2.5, 100.0);
+  double feed_time_s = 0;
+  for (const auto& seg : testing::build_path(blocks).segments) {
+    const double f = seg.rapid ? m.rapid_mm_min : std::min(seg.feed_mm_min, m.max_feed_mm_min);
+    feed_time_s += seg.length_mm / (std::max(f, 1e-9) / 60.0) + seg.dwell_after_s;
+  }
+  o.max_cycles = static_cast<std::uint64_t>((4 * feed_time_s + 20) / m.period_s);
+  RC_LOG() << "jerk " << m.max_jerk_mm_s3 << " mm/s3, window " << m.lookahead_blocks << ", X accel "
+           << m.axes[0].max_accel_mm_s2 << ", cycle cap " << o.max_cycles << "\n";
   const RunResult r = run(m, blocks, o);
   // After an override decrease this type decelerates at the segment's own acceleration, on an
   // arc in the slow Y axis's plane as low as √(1 − 0.95²)·800 = 250 mm/s² (accel_limited.cpp,
@@ -263,4 +277,48 @@ TEST(AccelFilter, SlowArcIntoARapidAtASharpCornerKeepsTheAxisLimit) {
 }
 
 }  // namespace
+// The shrunk case of a RapidCheck seed: 1 µm exact-stop moves (a G1 F60 among G0s) before a
+// 103 mm helix, with the jerk stage (T2 = 200 cycles) and a small window. The active caps of
+// retired blocks were merged into one (min V, max end): the F60 line's 1 mm/s with a rapid's
+// feed cap widened by lag·V to 100 mm, so the helix ran at 1 mm/s (101 s instead of 2.8 s).
+// A small window must cost nothing here: every window runs the program in the same time.
+TEST(AccelFilter, SmallWindowKeepsNoSlowCapOfRetiredBlocks) {
+  auto program = [](double slow_feed, int rapids) {
+    Prog p;
+    const PathMode stop = PathMode::kExactStop;
+    auto rapid = [&](double x) {
+      p.line_to(Vec3{x, 0, 0}, 0, stop);
+      p.blocks.back().kind = BlockKind::kRapid;
+    };
+    rapid(-0.001);
+    p.line_to(Vec3{-0.002, 0, 0}, slow_feed, stop);
+    for (int k = 0; k < rapids; ++k) rapid(-0.003 - 0.001 * k);
+    const double x = -0.002 - 0.001 * rapids;
+    p.arc_to(Vec3{x, 4, 0}, Vec3{x, 0, -8.2035}, 15000, {0, -1, 0}, 1);  // 2 turns, 103 mm
+    p.blocks.back().path_mode = stop;
+    return p;
+  };
+  for (const double slow_feed : {60.0, 600.0}) {
+    for (const int rapids : {1, 3}) {
+      const Prog p = program(slow_feed, rapids);
+      double reference_s = 0;
+      for (const std::size_t window : {1000, 16, 8, 4}) {
+        MachineConfig m = slow_axes_machine();
+        m.max_jerk_mm_s3 = 20000;
+        m.lookahead_blocks = window;
+        RunOpts o = accel_opts();
+        o.max_cycles = 1'000'000;
+        const RunResult r = run(m, p.blocks, o);
+        const auto rep = check(m, p.blocks, r);
+        EXPECT_TRUE(rep.ok()) << rep.summary();
+        expect_end(r, p.pos);
+        if (window == 1000) reference_s = r.time_s();
+        EXPECT_NEAR(r.time_s(), reference_s, 1e-3 * reference_s)
+            << "F" << slow_feed << ", " << rapids << " rapids, window " << window;
+      }
+      EXPECT_LT(reference_s, 3.0);
+    }
+  }
+}
+
 }  // namespace cncore::motion::test
