@@ -185,7 +185,8 @@ int command_run(const RunArgs& a) {
   if (csv) observers.push_back(&*csv);
   if (report) observers.push_back(&*report);
   if (cutting_stage) observers.push_back(&*cutting_stage);  // checks T words against the table
-  sim::run_program(a.program, machine, options, observers);
+  const sim::RunCounts counts = sim::run_program(a.program, machine, options, observers);
+  summary.set_program_blocks(counts.blocks);
   if (adaptive) {
     io::LoadSummary& l = summary.load_summary();
     l.adaptive = adaptive->ever_enabled();

@@ -94,6 +94,8 @@ void read_motion(const Reader& r, const toml::table& t, MachineConfig& c) {
       c.max_jerk_mm_s3 = r.number_in(key, node, name, 0, false, 1e9, "mm/s³");
     } else if (k == "contour_tolerance_mm") {
       c.contour_tolerance_mm = r.number_in(key, node, name, 0, true, 10, "mm");
+    } else if (k == "merge_tolerance_mm") {
+      c.merge_tolerance_mm = r.number_in(key, node, name, 0, false, 0.001, "mm");
     } else if (k == "post_filter_s") {
       c.post_filter_s = r.number_in(key, node, name, 0, false, 1, "s");
     } else if (k == "lookahead_blocks") {
@@ -540,6 +542,8 @@ std::string machine_config_to_toml(const MachineConfig& c) {
        "Jmax, mm/s³; 0 = no jerk stage, else a second filter of T2 = 2·Amax/Jmax");
   line("contour_tolerance_mm = " + num(c.contour_tolerance_mm),
        "largest allowed deviation from the path (corner rounding), mm (> 0)");
+  line("merge_tolerance_mm = " + num(c.merge_tolerance_mm),
+       "collinear G0/G1 pieces within this of one line run as that line, mm; 0 = off (<= 0.001)");
   line("post_filter_s = " + num(c.post_filter_s),
        "per-axis post-interpolation moving average, s; 0 = off (<= 1)");
   line("lookahead_blocks = " + std::to_string(c.lookahead_blocks),

@@ -73,7 +73,10 @@ struct MachineConfig {
   double rapid_mm_min = 15000;     // G0 rate
   double max_accel_mm_s2 = 2000;   // Amax, tangential and normal
   double max_jerk_mm_s3 = 0;       // 0: no jerk stage; else T2 = ⌈2·Amax/(Jmax·τ)⌉ cycles
-  double contour_tolerance_mm = 0.01;      // corner rounding of the post-interpolation filter
+  double contour_tolerance_mm = 0.01;  // corner rounding of the post-interpolation filter
+  // Consecutive G0/G1 pieces whose vertices lie within this of one straight line run as that
+  // line (planner/line_merge.hpp); 0: off. ≤ 1 µm (spec 01 P1).
+  double merge_tolerance_mm = 0;
   double post_filter_s = 0;                // per-axis post-interpolation moving average; 0: off
   std::uint32_t lookahead_blocks = 10000;  // capacity of the execution-data buffer
   double max_override_pct = 200;           // highest feed override accepted

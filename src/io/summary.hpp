@@ -91,6 +91,9 @@ class SummaryObserver : public sim::SampleObserver {
   // Spec 03: the cycle time of the same program with the direction correction off.
   void set_time_without_correction_s(double t_s) { summary_.time_without_correction_s = t_s; }
   void set_accdec(std::string accdec) { summary_.accdec = std::move(accdec); }
+  // The motion blocks of the program (the kernel may get fewer: collinear pieces merged, or
+  // more: arcs split by the direction correction).
+  void set_program_blocks(std::uint64_t n) { summary_.blocks = n; }
 
   void on_block(const Block& block) override;
   void on_sample(const motion::Sample& sample) override;

@@ -20,6 +20,8 @@
 #include "core/error.hpp"
 #include "core/spsc_ring.hpp"
 #include "feedcontrol/direction_correction.hpp"
+#include "planner/line_merge.hpp"
+#include "simulation/stepper.hpp"
 
 namespace cncore::sim {
 
@@ -44,23 +46,33 @@ struct alignas(64) Item {
   ItemKind kind = ItemKind::kEnd;
 };
 
-// Interpreter → direction correction (spec 03): one kernel block per call, reading source
-// blocks only as needed, so memory stays bounded whatever the program length. One interpreted
-// block may give several kernel blocks (an arc split by the direction correction).
+// Interpreter → direction correction (spec 03) → collinear pieces merged (planner/line_merge):
+// one kernel block per call, reading source blocks only as needed, so memory stays bounded
+// whatever the program length. One interpreted block may give several kernel blocks (an arc
+// split by the direction correction), and several pieces one (a line merged).
 class BlockProducer {
  public:
   BlockProducer(const std::string& program_path, const MachineConfig& machine,
-                const interp::Options& options)
-      : interpreter_(program_path, machine, options), corrector_(machine, program_path) {}
+                const interp::Options& options, const motion::KernelOptions& kernel)
+      : interpreter_(program_path, machine, options),
+        corrector_(machine, program_path),
+        merger_(make_line_merger(machine, kernel)) {}
 
   // Fills `item` (kBlock / kEnd / kInputError; the InputError in error()). Other exceptions
   // propagate.
   void next(Item& item) {
+    if (error_) {
+      // The line merged up to the error goes out first: the run stops at the end of the last
+      // good block, as without the merge.
+      item.kind = merger_.next(item.block) ? ItemKind::kBlock : ItemKind::kInputError;
+      return;
+    }
     try {
       item.kind = produce(item.block) ? ItemKind::kBlock : ItemKind::kEnd;
     } catch (const InputError&) {
       error_ = std::current_exception();
-      item.kind = ItemKind::kInputError;
+      merger_.finish();
+      item.kind = merger_.next(item.block) ? ItemKind::kBlock : ItemKind::kInputError;
     }
   }
 
@@ -71,10 +83,16 @@ class BlockProducer {
  private:
   bool produce(Block& block) {
     while (true) {
-      if (corrector_.next(block)) return true;
-      if (!more_) return false;
-      more_ = interpreter_.next(source_);
-      if (!more_) return false;
+      if (merger_.next(block)) return true;
+      if (corrector_.next(corrected_)) {
+        merger_.put(corrected_);
+        continue;
+      }
+      if (more_) more_ = interpreter_.next(source_);
+      if (!more_) {
+        merger_.finish();
+        return merger_.next(block);
+      }
       if (is_motion(source_)) ++motion_blocks_;
       corrector_.put(source_);
     }
@@ -82,7 +100,8 @@ class BlockProducer {
 
   interp::Interpreter interpreter_;
   feed::DirectionCorrector corrector_;
-  Block source_;
+  planner::LineMerger merger_;
+  Block source_, corrected_;
   bool more_ = true;  // the interpreter may still produce blocks
   std::uint64_t motion_blocks_ = 0;
   std::exception_ptr error_;
@@ -467,7 +486,7 @@ bool default_producer_thread() {
 RunCounts run_program(const std::string& program_path, const MachineConfig& machine,
                       const RunOptions& options, std::vector<SampleObserver*> observers) {
   // Constructed here, on the calling thread: a missing file throws before anything runs.
-  BlockProducer producer(program_path, machine, options.interpreter);
+  BlockProducer producer(program_path, machine, options.interpreter, options.kernel);
   if (!options.producer_thread) {
     InlineSource source(producer);
     return run_cycles(source, program_path, machine, options, observers);

@@ -13,33 +13,45 @@ ProgramStepper::ProgramStepper(const std::string& program_path, const MachineCon
                                const interp::Options& interpreter_options)
     : interpreter_(program_path, machine, interpreter_options),
       kernel_(machine, kernel_options),
-      corrector_(std::make_unique<feed::DirectionCorrector>(machine, program_path)) {}
+      corrector_(std::make_unique<feed::DirectionCorrector>(machine, program_path)),
+      merger_(make_line_merger(machine, kernel_options)) {}
 
 ProgramStepper::~ProgramStepper() = default;
+
+bool ProgramStepper::produce(Block& block) {
+  while (true) {
+    if (merger_.next(block)) return true;
+    if (corrector_->next(corrected_)) {
+      merger_.put(corrected_);
+      continue;
+    }
+    if (!error_ && interpreter_.next(source_)) {
+      if (source_.kind == BlockKind::kRapid || source_.kind == BlockKind::kLine ||
+          source_.kind == BlockKind::kArc) {
+        ++blocks_;
+      }
+      corrector_->put(source_);
+      continue;
+    }
+    merger_.finish();
+    return merger_.next(block);
+  }
+}
 
 bool ProgramStepper::next(motion::Sample& out) {
   // Read blocks only while the buffer has room: memory stays bounded whatever the length.
   // One interpreted block may give several kernel blocks (an arc split by the direction
-  // correction), handed out one at a time.
+  // correction) and several pieces one (a line merged), handed out one at a time.
   while (more_ && kernel_.wants_block()) {
     bool got = false;
     try {
-      got = corrector_->next(block_);
-      if (!got) {
-        got = interpreter_.next(source_);
-        if (got) {
-          if (source_.kind == BlockKind::kRapid || source_.kind == BlockKind::kLine ||
-              source_.kind == BlockKind::kArc) {
-            ++blocks_;
-          }
-          corrector_->put(source_);
-          continue;
-        }
-      }
+      got = produce(block_);
     } catch (const InputError&) {
-      // Finish the motion of the good blocks first, then report.
+      // Finish the motion of the good blocks first (the line merged up to here too), then
+      // report.
       error_ = std::current_exception();
-      got = false;
+      merger_.finish();
+      got = merger_.next(block_);
     }
     if (!got) {
       more_ = false;

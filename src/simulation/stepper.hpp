@@ -4,6 +4,7 @@
 // actions between cycles. Memory is bounded by the kernel's buffer, as in run_program.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <exception>
 #include <memory>
@@ -12,12 +13,23 @@
 #include "config/machine_config.hpp"
 #include "interpreter/interpreter.hpp"
 #include "motion/kernel.hpp"
+#include "planner/line_merge.hpp"
 
 namespace cncore::feed {
 class DirectionCorrector;
 }  // namespace cncore::feed
 
 namespace cncore::sim {
+
+// The stage that merges collinear pieces (planner/line_merge.hpp) for this machine: joints
+// turning by less than a corner passed at max(Vmax, rapid) needs. Off in stop mode (a stop at
+// every programmed block).
+inline planner::LineMerger make_line_merger(const MachineConfig& machine,
+                                            const motion::KernelOptions& kernel) {
+  const double top_mm_s = std::max(machine.max_feed_mm_min, machine.rapid_mm_min) / 60;
+  return {kernel.mode == motion::Mode::kStop ? 0.0 : machine.merge_tolerance_mm,
+          planner::LineMerger::max_turn_rad(machine.max_accel_mm_s2, machine.period_s, top_mm_s)};
+}
 
 class ProgramStepper {
  public:
@@ -38,11 +50,15 @@ class ProgramStepper {
   std::uint64_t blocks() const { return blocks_; }  // motion blocks interpreted so far
 
  private:
+  // The next block for the kernel (false at the end of the program or after an error).
+  bool produce(Block& block);
+
   interp::Interpreter interpreter_;
   motion::Kernel kernel_;
   // The direction feed correction stage (spec 03), as in run_program.
   std::unique_ptr<feed::DirectionCorrector> corrector_;
-  Block source_;
+  planner::LineMerger merger_;  // collinear pieces merged (planner/line_merge.hpp)
+  Block source_, corrected_;
   Block block_;
   bool more_ = true;  // the interpreter may still produce blocks
   std::exception_ptr error_;
