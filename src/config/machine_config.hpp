@@ -76,7 +76,7 @@ struct MachineConfig {
   double contour_tolerance_mm = 0.01;  // corner rounding of the post-interpolation filter
   // Consecutive G0/G1 pieces whose vertices lie within this of one straight line run as that
   // line (planner/line_merge.hpp); 0: off. ≤ 1 µm (spec 01 P1).
-  double merge_tolerance_mm = 0;
+  double merge_tolerance_mm = 0.0005;
   double post_filter_s = 0;                // per-axis post-interpolation moving average; 0: off
   std::uint32_t lookahead_blocks = 10000;  // capacity of the execution-data buffer
   double max_override_pct = 200;           // highest feed override accepted

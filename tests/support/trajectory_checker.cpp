@@ -136,7 +136,13 @@ CheckReport check_trajectory(const Trajectory& tr, const Path& path, const Limit
   // First segment within `snap` wins (the data is on the path up to its rounding); kept tight so
   // that a nearby leg of a hairpin is not taken for the segment the tool is on.
   const double snap = 1e-7 + 4 * q;
-  const double on_path = std::max(1e-6, 10 * q);
+  // Samples this close to the path move along it: their speed is the progress of their
+  // projections (a step across a corner is longer than its chord). Without the post filter up
+  // to the P1 bound (1 µm): a tool on a merged chord (planner/line_merge.hpp) is nm off the
+  // pieces it replaces, and its chord across a real corner faked a 0.6 % tangential
+  // acceleration (1 nm before). With it, rounded corners are measured by their chords.
+  const double p1_mm = lim.path_tolerance_mm <= 1e-3 ? lim.path_tolerance_mm : 0.0;
+  const double on_path = std::max({1e-6, 10 * q, p1_mm});
   const double vcap_mm_s = std::max(lim.max_feed_mm_min, lim.rapid_mm_min) / 60.0 *
                            std::max(1.0, lim.max_override_pct / 100.0);
   constexpr std::size_t kMaxScan = 200000;
