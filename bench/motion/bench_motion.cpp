@@ -17,6 +17,10 @@
 // memory, untimed, before every step — the cache traffic of the pushes a finer program makes
 // between two cycles, on a coarse one: how much of a fine program's step() is its input's
 // traffic rather than its work).
+//
+// The "_merged" programs are the same blocks handed to the kernel through the collinear-piece
+// stage of `cncore run` (planner/line_merge.hpp, [motion] merge_tolerance_mm): the stage's
+// work is timed with the pushes, as the interpretation is not.
 #include <benchmark/benchmark.h>
 #include <sys/mman.h>
 #include <sys/resource.h>
@@ -42,7 +46,9 @@
 #include "interpreter/interpreter.hpp"
 #include "motion/kernel.hpp"
 #include "planner/huge_pages.hpp"
+#include "planner/line_merge.hpp"
 #include "program_gen.hpp"
+#include "simulation/stepper.hpp"
 
 // Heap accounting: every operator new in the process is counted, so a run can show that the
 // kernel allocates only at construction (and how much) and never while it runs.
@@ -93,17 +99,64 @@ struct Program {
   std::vector<Block> blocks;
   bool ok = false;
   std::string error;
+  bool merge = false;  // through the collinear-piece stage (see the top)
 };
+
+// A program's blocks in the order the kernel takes them, direct or through the collinear-piece
+// stage (its put/next calls then run inside the timed loops).
+class Feed {
+ public:
+  explicit Feed(const Program& p)
+      : blocks_(p.blocks),
+        merge_(p.merge),
+        merger_(sim::make_line_merger(default_machine_config(), {})) {}
+  // The next block, or nullptr at the end of the program.
+  const Block* next() {
+    if (!merge_) return next_ < blocks_.size() ? &blocks_[next_++] : nullptr;
+    while (true) {
+      if (merger_.next(out_)) return &out_;
+      if (next_ == blocks_.size()) {
+        merger_.finish();
+        return merger_.next(out_) ? &out_ : nullptr;
+      }
+      merger_.put(blocks_[next_++]);
+    }
+  }
+
+ private:
+  const std::vector<Block>& blocks_;
+  bool merge_;
+  planner::LineMerger merger_;
+  std::size_t next_ = 0;
+  Block out_;
+};
+
+// Pushes blocks while the kernel wants them; at the end of the program, tells it so.
+inline void feed_kernel(motion::Kernel& k, Feed& feed, bool& ended) {
+  while (!ended && k.wants_block()) {
+    const Block* b = feed.next();
+    if (b == nullptr) {
+      ended = true;
+      break;
+    }
+    k.push(*b);
+  }
+  if (ended) k.end_of_program();
+}
 
 // A program is interpreted the first time a selected benchmark needs it (not timed).
 struct LazyProgram {
-  LazyProgram(std::string n, Program (*l)(int), int f) : name(std::move(n)), load(l), factor(f) {}
+  LazyProgram(std::string n, Program (*l)(int), int f, bool m = false)
+      : name(std::move(n)), load(l), factor(f), merge(m) {}
   std::string name;
   Program (*load)(int factor);
   int factor;
+  bool merge;
   const Program& get() {
     if (!done) {
       prog = load(factor);
+      prog.merge = merge;
+      prog.name = name;
       if (!prog.ok)
         std::fprintf(stderr, "bench_motion: %s skipped: %s\n", name.c_str(), prog.error.c_str());
       done = true;
@@ -205,13 +258,13 @@ const char* type_name(int type) {
 // Feeds a program's blocks as the kernel asks for them and steps it to the end; on_sample sees
 // every sample. Returns the cycles stepped.
 template <class OnSample>
-std::uint64_t drive(motion::Kernel& k, const std::vector<Block>& blocks, OnSample on_sample) {
+std::uint64_t drive(motion::Kernel& k, const Program& prog, OnSample on_sample) {
   std::uint64_t cycles = 0;
-  std::size_t next = 0;
+  Feed feed(prog);
+  bool ended = false;
   motion::Sample s;
   for (;;) {
-    while (next < blocks.size() && k.wants_block()) k.push(blocks[next++]);
-    if (next == blocks.size()) k.end_of_program();
+    feed_kernel(k, feed, ended);
     if (!k.step(s)) break;
     on_sample(s);
     ++cycles;
@@ -246,7 +299,7 @@ void BM_Throughput(benchmark::State& state, LazyProgram* lazy, int type) {
     const std::uint64_t a0 = g_allocs + planner::huge_alloc_stats().allocations;
     state.ResumeTiming();
     const auto w0 = std::chrono::steady_clock::now();
-    cycles += drive(*k, prog->blocks, [](motion::Sample& s) { benchmark::DoNotOptimize(s); });
+    cycles += drive(*k, *prog, [](motion::Sample& s) { benchmark::DoNotOptimize(s); });
     wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
     state.PauseTiming();
     run_allocs = g_allocs + planner::huge_alloc_stats().allocations - a0;
@@ -345,12 +398,12 @@ void BM_Latency(benchmark::State& state, LazyProgram* lazy, int type) {
       motion::Kernel k(m, o);
       std::uint64_t* rt = raw.data() + cap * static_cast<std::size_t>(run);
       std::uint64_t* re = raw_empty.data() + cap * static_cast<std::size_t>(run);
-      std::size_t next = 0, c = 0;
-      const std::size_t n = prog->blocks.size();
+      std::size_t c = 0;
+      Feed feed(*prog);
+      bool ended = false;
       motion::Sample s;
       for (;;) {
-        while (next < n && k.wants_block()) k.push(prog->blocks[next++]);
-        if (next == n) k.end_of_program();
+        feed_kernel(k, feed, ended);
         // One byte per 64-byte line, with a running value the compiler cannot drop.
         for (std::size_t i = 0; i < g_evict.size(); i += 64) g_evict[i] += 1;
         benchmark::ClobberMemory();
@@ -436,7 +489,7 @@ void print_digests() {
         const auto* c = static_cast<const unsigned char*>(p);
         for (std::size_t i = 0; i < n; ++i) h = (h ^ c[i]) * 1099511628211ull;
       };
-      const std::uint64_t cycles = drive(k, prog.blocks, [&mix](const motion::Sample& s) {
+      const std::uint64_t cycles = drive(k, prog, [&mix](const motion::Sample& s) {
         mix(&s.t_s, sizeof s.t_s);
         mix(&s.line, sizeof s.line);
         mix(&s.position, sizeof s.position);
@@ -463,7 +516,7 @@ int profile(const std::string& name, const std::string& type, int runs) {
     const auto w0 = std::chrono::steady_clock::now();
     for (int run = 0; run < runs; ++run) {
       motion::Kernel k(m, options(t));
-      cycles += drive(k, prog.blocks, [](motion::Sample& s) { benchmark::DoNotOptimize(s); });
+      cycles += drive(k, prog, [](motion::Sample& s) { benchmark::DoNotOptimize(s); });
     }
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
     std::printf("%s %s: %llu cycles in %.3f s\n", name.c_str(), type_name(t),
@@ -542,11 +595,13 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(n, args.data())) return 1;
 
   auto& progs = programs();
-  progs.reserve(4);
+  progs.reserve(6);
   progs.emplace_back("stress_test", load_stress, 1);
   progs.emplace_back("stress_test_x100", load_stress, 100);
   progs.emplace_back("random_2k", load_random, 1);
   progs.emplace_back("random_2k_x100", load_random, 100);
+  progs.emplace_back("stress_test_x100_merged", load_stress, 100, true);
+  progs.emplace_back("random_2k_x100_merged", load_random, 100, true);
   if (digest) {
     print_digests();
     return 0;

@@ -1,6 +1,7 @@
 #include "planner/line_merge.hpp"
 
 #include <cmath>
+#include <numbers>
 
 namespace cncore::planner {
 namespace {
@@ -22,38 +23,53 @@ bool same_value(double a, double b) {
   return a == b || (std::isnan(a) && std::isnan(b));
 }
 
+double angle(const Vec3& a, const Vec3& b) {
+  return std::atan2(norm(cross(a, b)), dot(a, b));  // exact at small angles, unlike acos
+}
+
 }  // namespace
 
-bool LineMerger::extends(const Block& b) const {
+bool LineMerger::extends(const Block& b, Cone& cone) const {
   const Block& a = line_;
-  if (a.path_mode != PathMode::kBlend || vertices_ == kMaxPieces) return false;
+  if (a.path_mode != PathMode::kBlend || pieces_ == kMaxPieces) return false;
   if (b.kind != a.kind || b.feed_mm_min != a.feed_mm_min || b.tolerance_mm != a.tolerance_mm ||
       !same_value(b.correction, a.correction) || b.override_fixed != a.override_fixed) {
     return false;
   }
-  if (b.start != a.end) return false;
+  if (b.start != a.end || !mergeable_kind(b)) return false;
   const Vec3 piece = b.end.xyz() - b.start.xyz();
   if (dot(last_dir_, piece) < min_cos_ * norm(piece)) return false;  // turns by more
-  // The chord from the line's start to b's end, and every inner vertex (b's start the last).
+  // The line's end becomes an inner vertex v at r = |v − P0| from its start P0: the line from
+  // P0 along a direction e passes within δ of v when angle(e, v − P0) ≤ asin(δ/r). The
+  // directions allowed by every inner vertex so far are kept as one cone inside their
+  // intersection (O(1) per piece): on the great circle from the cone's axis to v the two caps
+  // overlap in [γ − β, α] (γ the angle between the axes), and the cap centred there touches
+  // both boundaries, so it lies inside both.
   const Vec3 p0 = a.start.xyz();
+  const Vec3 v = a.end.xyz() - p0;
+  const double r = norm(v);
+  if (!(r > cone_.r_mm)) return false;  // inner vertices ever farther from P0: in order
+  cone = cone_;
+  const Vec3 vu = (1 / r) * v;
+  const double beta = r > tolerance_mm_ ? std::asin(tolerance_mm_ / r) : std::numbers::pi / 2;
+  const double gamma = cone.r_mm == 0 ? 0.0 : angle(cone.axis, vu);
+  cone.r_mm = r;
+  if (gamma + beta <= cone.half_angle) {
+    cone.axis = vu;  // v's cap inside the cone
+    cone.half_angle = beta;
+  } else if (gamma + cone.half_angle > beta) {  // (else the cone is inside v's cap)
+    const double h = 0.5 * (cone.half_angle + beta - gamma);
+    if (!(h > 0)) return false;  // no direction passes near every vertex
+    const double m = 0.5 * (gamma - beta + cone.half_angle);
+    const Vec3 w = vu - dot(vu, cone.axis) * cone.axis;  // towards v, ⟂ the axis
+    const double wn = norm(w);
+    if (wn > 0) cone.axis = std::cos(m) * cone.axis + (std::sin(m) / wn) * w;
+    cone.half_angle = h;
+  }
+  // The new chord must lie in the cone and reach past the last inner vertex.
   const Vec3 chord = b.end.xyz() - p0;
   const double len = norm(chord);
-  if (!(len > 0)) return false;
-  const Vec3 u = (1 / len) * chord;
-  const double tol2 = tolerance_mm_ * tolerance_mm_;
-  double t_prev = 0;
-  auto inside = [&](const Vec3& v) {
-    const Vec3 d = v - p0;
-    const double t = dot(d, u);
-    // |d|² − t² is the squared distance to the chord's line (cancellation: ≥ 0 up to rounding).
-    if (!(t > t_prev && t < len) || dot(d, d) - t * t > tol2) return false;
-    t_prev = t;
-    return true;
-  };
-  for (std::size_t i = 0; i < vertices_; ++i) {
-    if (!inside(vertex_[i])) return false;
-  }
-  return inside(a.end.xyz());
+  return len > r && angle(cone.axis, chord) <= cone.half_angle;
 }
 
 void LineMerger::emit(const Block& b) {
@@ -66,8 +82,10 @@ void LineMerger::put(const Block& block) {
     emit(block);
     return;
   }
-  if (pending_ && extends(block)) {
-    vertex_[vertices_++] = line_.end.xyz();
+  Cone cone;
+  if (pending_ && extends(block, cone)) {
+    cone_ = cone;
+    ++pieces_;
     last_dir_ = unit_direction(block);
     line_.end = block.end;
     line_.path_mode = block.path_mode;
@@ -77,7 +95,8 @@ void LineMerger::put(const Block& block) {
   if (mergeable_kind(block)) {
     line_ = block;
     last_dir_ = unit_direction(block);
-    vertices_ = 0;
+    cone_ = Cone{};
+    pieces_ = 1;
     pending_ = true;
   } else {
     emit(block);

@@ -16,8 +16,8 @@
 // then stays within tolerance_mm of the programmed path (spec 01 P1: ≤ 1 µm; 0.5 µm is a
 // good setting), and passes no vertex the pieces did not program. A piece
 // whose end must be held (G61 exact path, G61.1 / G9 exact stop) ends the merge: the vertex
-// stays exact. At most kMaxPieces per line, so a check costs O(kMaxPieces) per block and the
-// memory is fixed.
+// stays exact. The test costs O(1) per piece (a cone of allowed directions, line_merge.cpp);
+// at most kMaxPieces per line.
 //
 // On by default ([motion] merge_tolerance_mm = 0.0005; 0 turns it off; off in stop mode): the
 // random 2 000-segment program cut into 100× pieces runs in the time of the original (85.89 s
@@ -53,19 +53,27 @@ class LineMerger {
   // The blocks ready, in program order.
   bool next(Block& out);
 
-  static constexpr std::size_t kMaxPieces = 64;
+  static constexpr std::size_t kMaxPieces = 1024;
 
  private:
-  bool extends(const Block& b) const;
+  // The directions from the line's start that pass within the tolerance of every inner vertex
+  // (a cone inside their intersection; the whole sphere before the first), and the distance
+  // of the last inner vertex from the start.
+  struct Cone {
+    Vec3 axis{1, 0, 0};
+    double half_angle = 3.14159265358979323846;
+    double r_mm = 0;
+  };
+  bool extends(const Block& b, Cone& cone) const;
   void emit(const Block& b);
 
   double tolerance_mm_;
   double min_cos_;  // cos of the largest turn at a merged joint
   bool pending_ = false;
-  Vec3 last_dir_;                          // unit direction of the last piece merged
-  Block line_;                             // the merged line so far
-  std::array<Vec3, kMaxPieces> vertex_{};  // its inner vertices, in order
-  std::size_t vertices_ = 0;
+  Vec3 last_dir_;  // unit direction of the last piece merged
+  Block line_;     // the merged line so far
+  Cone cone_;
+  std::size_t pieces_ = 0;      // pieces in it
   std::array<Block, 2> out_{};  // ready: at most the line and the block after
   std::size_t out_head_ = 0, out_size_ = 0;
 };

@@ -160,7 +160,7 @@ TEST(RunProgram, MissingFileIsAnInputError) {
 
 // [motion] merge_tolerance_mm: a program of straight lines cut into 100 pieces each (3–10 µm),
 // written with 6 decimals, runs as the lines it describes: the same samples as the original
-// within 1 µm (the pieces' wobble is 1 nm), in kMaxPieces-piece lines.
+// within 1 µm (the pieces' wobble is 1 nm).
 TEST(RunProgram, MergedPiecesRunAsTheLinesTheyDescribe) {
   const double corners[][2] = {{0, 0}, {1, 0.3}, {1.2, 0.9}, {0.4, 0.95}, {0.3, 0.1}};
   std::string lines = "G21 G90 F6000\n", pieces = lines;
@@ -182,8 +182,8 @@ TEST(RunProgram, MergedPiecesRunAsTheLinesTheyDescribe) {
   run_program(program_file("lines.ngc", lines + "M2\n"), m, {}, {&whole});
   const RunCounts n = run_program(program_file("pieces.ngc", pieces + "M2\n"), m, {}, {&merged});
   EXPECT_EQ(n.blocks, 400u);  // the program's blocks, not the kernel's
-  // 4 lines of 100 pieces: 2 merged lines each (64 + 36), and M2.
-  EXPECT_EQ(merged.blocks.size(), 4 * 2 + 1u);
+  // 4 lines of 100 pieces, and M2.
+  EXPECT_EQ(merged.blocks.size(), 4 + 1u);
   ASSERT_EQ(merged.samples.size(), whole.samples.size());
   for (std::size_t i = 0; i < merged.samples.size(); ++i) {
     ASSERT_LE(norm(merged.samples[i].position.xyz() - whole.samples[i].position.xyz()), 1e-6)
