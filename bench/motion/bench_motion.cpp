@@ -595,11 +595,12 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(n, args.data())) return 1;
 
   auto& progs = programs();
-  progs.reserve(6);
+  progs.reserve(7);
   progs.emplace_back("stress_test", load_stress, 1);
   progs.emplace_back("stress_test_x100", load_stress, 100);
   progs.emplace_back("random_2k", load_random, 1);
   progs.emplace_back("random_2k_x100", load_random, 100);
+  progs.emplace_back("stress_test_merged", load_stress, 1, true);
   progs.emplace_back("stress_test_x100_merged", load_stress, 100, true);
   progs.emplace_back("random_2k_x100_merged", load_random, 100, true);
   if (digest) {
