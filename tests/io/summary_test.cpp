@@ -168,6 +168,29 @@ TEST(Summary, RepeatedLinesAddUp) {
   EXPECT_NEAR(s.slowest[0].time_s, 0.2, 1e-9);
 }
 
+// A 90° corner (at 1 mm along X, then along Y) passed at a constant 0.1 mm per cycle, the
+// corner 0.07 mm after a sample: the chord across it is shorter than the step along the path.
+// Measured by the chord the speed dips (a tangential acceleration of thousands of mm/s²); with the
+// kernel's path speed on the path it is 0. A recorded trajectory without speeds keeps the chord's
+// measure.
+TEST(Summary, TangentialAccelerationFollowsThePathAcrossACorner) {
+  auto run = [](bool with_speed) {
+    SummaryObserver obs(default_machine_config(), "lookahead");
+    const double u = 0.1;  // mm per cycle: 100 mm/s
+    for (int k = 0; k <= 40; ++k) {
+      const double s_mm = 1.03 + u * (k - 20);  // path position: sample 19 at 0.93, 20 at 1.03
+      const Vec3 p = s_mm <= 1.0 ? Vec3{s_mm, 0, 0} : Vec3{1.0, s_mm - 1.0, 0};
+      motion::Sample smp = at(k * kTau, 1, p);
+      if (with_speed) smp.feed_mm_min = k == 0 ? 0.0 : u / kTau * 60;
+      obs.on_sample(smp);
+    }
+    obs.on_finish();
+    return obs.summary().max_tangential_accel_mm_s2;
+  };
+  EXPECT_LT(run(true), 1e-6);
+  EXPECT_GT(run(false), 1000.0);
+}
+
 TEST(Summary, WarnsOnTravelAndLimitViolations) {
   SummaryObserver obs(default_machine_config(), "stop");
   // X jumps to 301 mm (beyond +300) with a huge acceleration.
