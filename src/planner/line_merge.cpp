@@ -6,6 +6,8 @@
 namespace cncore::planner {
 namespace {
 
+constexpr double kSameRate = 1 + 1e-3;
+
 bool mergeable_kind(const Block& b) {
   if (b.kind != BlockKind::kLine && b.kind != BlockKind::kRapid) return false;
   for (std::size_t i = kA; i < kMaxAxes; ++i) {
@@ -19,10 +21,6 @@ Vec3 unit_direction(const Block& b) {
   return (1 / norm(d)) * d;
 }
 
-bool same_value(double a, double b) {
-  return a == b || (std::isnan(a) && std::isnan(b));
-}
-
 double angle(const Vec3& a, const Vec3& b) {
   return std::atan2(norm(cross(a, b)), dot(a, b));  // exact at small angles, unlike acos
 }
@@ -32,10 +30,15 @@ double angle(const Vec3& a, const Vec3& b) {
 bool LineMerger::extends(const Block& b, Cone& cone) const {
   const Block& a = line_;
   if (a.path_mode != PathMode::kBlend || pieces_ == kMaxPieces) return false;
-  if (b.kind != a.kind || b.feed_mm_min != a.feed_mm_min || b.tolerance_mm != a.tolerance_mm ||
-      !same_value(b.correction, a.correction) || b.override_fixed != a.override_fixed) {
+  if (b.kind != a.kind || b.tolerance_mm != a.tolerance_mm ||
+      b.override_fixed != a.override_fixed ||
+      std::isnan(b.correction) != std::isnan(a.correction)) {
     return false;
   }
+  // Feeds within kSameRate of each other (the direction correction's C differs by rounding
+  // between the wobbling pieces of one line); the line runs at the lowest.
+  const double lo = std::min(a.feed_mm_min, b.feed_mm_min);
+  if (std::max(feed_hi_mm_min_, b.feed_mm_min) > kSameRate * lo) return false;
   if (b.start != a.end || !mergeable_kind(b)) return false;
   const Vec3 piece = b.end.xyz() - b.start.xyz();
   if (dot(last_dir_, piece) < min_cos_ * norm(piece)) return false;  // turns by more
@@ -86,6 +89,11 @@ void LineMerger::put(const Block& block) {
   if (pending_ && extends(block, cone)) {
     cone_ = cone;
     ++pieces_;
+    feed_hi_mm_min_ = std::max(feed_hi_mm_min_, block.feed_mm_min);
+    if (block.feed_mm_min < line_.feed_mm_min) {
+      line_.feed_mm_min = block.feed_mm_min;
+      line_.correction = block.correction;
+    }
     last_dir_ = unit_direction(block);
     line_.end = block.end;
     line_.path_mode = block.path_mode;
@@ -97,6 +105,7 @@ void LineMerger::put(const Block& block) {
     last_dir_ = unit_direction(block);
     cone_ = Cone{};
     pieces_ = 1;
+    feed_hi_mm_min_ = block.feed_mm_min;
     pending_ = true;
   } else {
     emit(block);

@@ -7,7 +7,8 @@
 // within one step), and each piece an item of the window. Merged, the tool runs the straight
 // line the pieces describe.
 //
-// Pieces of one kind (G0 or G1) with the same feed, correction and G64 tolerance, moving no
+// Pieces of one kind (G0 or G1) with the same feed (within 0.1 %: the direction correction's C
+// differs by rounding between pieces; the line runs at the lowest) and G64 tolerance, moving no
 // axis but X Y Z, merge while every vertex between them lies within tolerance_mm of the chord
 // from the first start to the last end, in order along it (projections strictly increasing,
 // inside the chord), and while each joint turns by at most max_turn_rad: a corner the look-ahead
@@ -74,6 +75,7 @@ class LineMerger {
   Block line_;     // the merged line so far
   Cone cone_;
   std::size_t pieces_ = 0;      // pieces in it
+  double feed_hi_mm_min_ = 0;   // the highest feed of its pieces (line_ has the lowest)
   std::array<Block, 2> out_{};  // ready: at most the line and the block after
   std::size_t out_head_ = 0, out_size_ = 0;
 };
