@@ -61,7 +61,8 @@ void expect_covers(const std::vector<Block>& in, const std::vector<Block>& out, 
     ASSERT_LT(k, in.size());
     ASSERT_EQ(o.start, in[k].start) << "output block starts at no input vertex";
     while (k < in.size() && in[k].end != o.end) {
-      EXPECT_LE(distance(in[k].end.xyz(), o.start.xyz(), o.end.xyz()), tol * (1 + 1e-9));
+      // (+1e-9 mm: the rounding of a distance computed from coordinates of metres.)
+      EXPECT_LE(distance(in[k].end.xyz(), o.start.xyz(), o.end.xyz()), tol + 1e-9);
       ++k;
     }
     ASSERT_LT(k, in.size()) << "output block ends at no input vertex";
