@@ -79,11 +79,6 @@ SummaryObserver::SummaryObserver(const MachineConfig& machine, std::string mode)
   }
 }
 
-double SummaryObserver::tangential_speed_mm_s(const motion::Sample& s, bool on_path,
-                                              double chord_speed_mm_s) {
-  return on_path ? s.feed_mm_min / 60 : chord_speed_mm_s;
-}
-
 void SummaryObserver::on_block(const Block& b) {
   double cap = 0;
   switch (b.kind) {
@@ -299,6 +294,8 @@ void SummaryObserver::sample(const motion::Sample& s) {
       }
       const double len = d.length_mm;
       const double speed = d.speed_mm_s;  // mm/s
+      // Along the path where the set-point is on it (see the tangential acceleration below).
+      const double speed_t = on_path ? s.feed_mm_min / 60 : speed;
       summary_.path_length_mm += len;
       summary_.max_feed_mm_min = std::max(summary_.max_feed_mm_min, speed * 60);
       if (d.accel) {
@@ -311,7 +308,6 @@ void SummaryObserver::sample(const motion::Sample& s) {
         // along it, that speed; else the chord's. A step across a corner is longer than its
         // chord, and the chord's dip read as 8 % over Amax on a bundled example
         // (cam-short-segments.ngc: 2 168 mm/s², 2 000 along the path by cncore-trajcheck).
-        const double speed_t = tangential_speed_mm_s(s, on_path, d.speed_mm_s);
         if (prev_on_path_ == on_path) {
           raise_max_quotient(summary_.max_tangential_accel_mm_s2,
                              std::fabs(speed_t - prev_speed_t_), h);
@@ -343,7 +339,7 @@ void SummaryObserver::sample(const motion::Sample& s) {
           if (target > 0 && speed * 60 < target) group_.lost_s += dt * (1 - speed * 60 / target);
         }
       }
-      prev_speed_t_ = tangential_speed_mm_s(s, on_path, d.speed_mm_s);
+      prev_speed_t_ = speed_t;
       prev_on_path_ = on_path;
     }
   }

@@ -130,8 +130,6 @@ class SummaryObserver : public sim::SampleObserver {
   GrowingFifo<Pending> pending_;
   FiniteDifferences diff_;  // velocities and accelerations of the set-points
   // Tangential acceleration: the previous sample's speed along the path (see on_sample).
-  static double tangential_speed_mm_s(const motion::Sample& s, bool on_path,
-                                      double chord_speed_mm_s);
   double prev_speed_t_ = 0;
   bool prev_on_path_ = false;
   // Recent on-path points: the servo set-point lags behind on the path (post-interpolation
