@@ -19,8 +19,7 @@ constexpr std::size_t kSlowReported = 5;
 constexpr std::size_t kMatchWindow = 16;  // blocks searched ahead when the line changes
 
 std::string axis_name(std::size_t i) {
-  return std::string(1,
-                     static_cast<char>(std::tolower(static_cast<unsigned char>(kAxisLetters[i]))));
+  return {static_cast<char>(std::tolower(static_cast<unsigned char>(kAxisLetters[i])))};
 }
 
 // m = max(m, a / h) for a ≥ 0 (or NaN) and h > 0, dividing only when the quotient can matter.

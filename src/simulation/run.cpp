@@ -484,7 +484,7 @@ bool default_producer_thread() {
 }
 
 RunCounts run_program(const std::string& program_path, const MachineConfig& machine,
-                      const RunOptions& options, std::vector<SampleObserver*> observers) {
+                      const RunOptions& options, const std::vector<SampleObserver*>& observers) {
   // Constructed here, on the calling thread: a missing file throws before anything runs.
   BlockProducer producer(program_path, machine, options.interpreter, options.kernel);
   if (!options.producer_thread) {

@@ -81,6 +81,6 @@ struct RunCounts {
 // and the cycle controller are called on the calling thread only, in the same order whether
 // or not the program is interpreted on a producer thread (RunOptions::producer_thread).
 RunCounts run_program(const std::string& program_path, const MachineConfig& machine,
-                      const RunOptions& options, std::vector<SampleObserver*> observers);
+                      const RunOptions& options, const std::vector<SampleObserver*>& observers);
 
 }  // namespace cncore::sim
