@@ -29,6 +29,9 @@ struct Block {
   BlockKind kind = BlockKind::kLine;
   std::uint32_t line = 0;  // source line, 1-based
   std::uint32_t col = 0;   // column of the first word of the block, 1-based
+  // A line merged from collinear pieces (planner/line_merge.hpp): the source line of its last
+  // piece (`line` is its first's). 0: the block is one source block.
+  std::uint32_t last_line = 0;
 
   // Motion (kRapid, kLine, kArc). start equals the previous motion block's end.
   AxisVec start;

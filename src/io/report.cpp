@@ -93,6 +93,7 @@ void ReportObserver::on_block(const Block& b) {
   }
   Pending p;
   p.line = b.line;
+  p.last_line = b.last_line;
   p.kind = b.kind;
   p.cap_mm_min = b.kind == BlockKind::kRapid ? machine_.rapid_mm_min : machine_.max_feed_mm_min;
   p.feed_mm_min = b.kind == BlockKind::kRapid ? machine_.rapid_mm_min : b.feed_mm_min;
@@ -244,6 +245,7 @@ void ReportObserver::on_sample(const motion::Sample& s) {
     group_.last_speed_mm_min = 0;
   }
   const Pending* b = s.line != 0 ? current_block(s.line) : nullptr;
+  if (b != nullptr) group_.spot.last_line = b->last_line;
   const double feed = b ? b->feed_mm_min : 0;
   const double cap = b ? b->cap_mm_min : 0;
   const double target = b ? std::min(b->feed_mm_min * s.override_pct / 100, b->cap_mm_min) : 0;
@@ -675,12 +677,17 @@ std::string render_report_html(const ReportObserver& report, const Summary& summ
   for (std::size_t i = 0; i < slow.size(); ++i) {
     const ReportSlowSpot& s = slow[i];
     const auto text = texts.find(s.line);
+    // A merged line (collinear pieces run as one): its first piece's text, and the range.
+    const bool merged = s.last_line != 0 && s.last_line != s.line;
     o += fmt::format(
-        "<tr><td>{}</td><td class=\"num\">{}</td><td><code>{}</code></td><td "
+        "<tr><td>{}</td><td class=\"num\">{}</td><td><code>{}</code>{}</td><td "
         "class=\"num\">{:.3f}</td><td class=\"num\">{:.0f}</td><td class=\"num\">{:.0f}</td>"
         "<td class=\"num\">{}</td>",
-        i + 1, s.line, text == texts.end() ? "" : html_escape(text->second), s.lost_s,
-        s.min_speed_mm_min, s.target_mm_min, s.visits);
+        i + 1, merged ? fmt::format("{}–{}", s.line, s.last_line) : fmt::format("{}", s.line),
+        text == texts.end() ? "" : html_escape(text->second),
+        merged ? fmt::format(" … (collinear lines run as one, through line {})", s.last_line)
+               : std::string(),
+        s.lost_s, s.min_speed_mm_min, s.target_mm_min, s.visits);
     if (report.has_override()) o += fmt::format("<td class=\"num\">{:.0f}</td>", s.override_pct);
     if (report.has_correction()) {
       o += std::isnan(s.correction) ? std::string("<td></td>")

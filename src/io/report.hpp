@@ -48,6 +48,7 @@ struct ReportPathPoint {
 // A slow program line: where and how slow it got, and why.
 struct ReportSlowSpot {
   std::uint32_t line = 0;
+  std::uint32_t last_line = 0;  // a merged line (Block::last_line): lines line…last_line
   std::uint64_t visits = 0;
   double lost_s = 0;  // Σ dt·(1 − v/target), target = programmed feed × override (capped)
   double time_s = 0, length_mm = 0;
@@ -88,6 +89,7 @@ class ReportObserver : public sim::SampleObserver {
   // A block handed to the kernel and not yet executed (bounded by the kernel's buffer).
   struct Pending {
     std::uint32_t line = 0;
+    std::uint32_t last_line = 0;  // Block::last_line
     BlockKind kind = BlockKind::kLine;
     double feed_mm_min = 0;  // programmed (rapid rate for G0), before the machine's cap
     double cap_mm_min = 0;   // the machine limit of the move

@@ -84,16 +84,16 @@ void SummaryObserver::on_block(const Block& b) {
     case BlockKind::kRapid:
       cap = machine_.rapid_mm_min;
       ++summary_.blocks;
-      pending_.push_back({b.line, cap, cap, true});
+      pending_.push_back({b.line, cap, cap, true, b.last_line});
       break;
     case BlockKind::kLine:
     case BlockKind::kArc:
       cap = machine_.max_feed_mm_min;
       ++summary_.blocks;
-      pending_.push_back({b.line, std::min(b.feed_mm_min, cap), cap, false});
+      pending_.push_back({b.line, std::min(b.feed_mm_min, cap), cap, false, b.last_line});
       break;
     case BlockKind::kDwell:
-      pending_.push_back({b.line, 0, 0, false});
+      pending_.push_back({b.line, 0, 0, false, 0});
       break;
     case BlockKind::kAux:
       break;
@@ -139,6 +139,7 @@ void SummaryObserver::close_group() {
     same->length_mm += group_.length_mm;
     same->programmed_feed_mm_min = group_.programmed_feed_mm_min;
     same->visits += 1;
+    if (group_.last_line != 0) same->last_line = group_.last_line;
     // lost_s only grows: the least candidate stays the least unless it grew itself.
     if (same - top_.begin() == static_cast<std::ptrdiff_t>(least_) && group_.lost_s != 0) {
       least_ = kNoLeast;
@@ -335,6 +336,7 @@ void SummaryObserver::sample(const motion::Sample& s) {
           const double target = target_;
           group_.programmed_feed_mm_min = target;
           group_.rapid = b->rapid;
+          group_.last_line = b->last_line;
           if (target > 0 && speed * 60 < target) group_.lost_s += dt * (1 - speed * 60 / target);
         }
       }
@@ -428,6 +430,7 @@ std::string summary_to_json(const Summary& s, const MachineConfig& machine) {
   for (const SlowSpot& p : s.slowest) {
     nlohmann::ordered_json o;
     o["line"] = p.line;
+    o["last_line"] = p.last_line != 0 ? p.last_line : p.line;
     o["lost_s"] = p.lost_s;
     o["time_s"] = p.time_s;
     o["length_mm"] = p.length_mm;
@@ -505,9 +508,13 @@ std::string format_human_summary(const Summary& s, const MachineConfig& machine,
   } else {
     o += "slowest spots time lost against the programmed feed, worst first:\n";
     for (const SlowSpot& p : s.slowest) {
-      o += fmt::format("  line {:<6} {:.3f} s lost of {:.3f} s, average {:.0f} of {:.0f} mm/min{}",
-                       p.line, p.lost_s, p.time_s, p.average_feed_mm_min(),
-                       p.programmed_feed_mm_min, p.rapid ? " (G0)" : "");
+      // A merged line (collinear pieces run as one): the source lines of its first and last piece.
+      const std::string where = p.last_line != 0 && p.last_line != p.line
+                                    ? fmt::format("lines {}-{}", p.line, p.last_line)
+                                    : fmt::format("line {}", p.line);
+      o += fmt::format("  {:<11} {:.3f} s lost of {:.3f} s, average {:.0f} of {:.0f} mm/min{}",
+                       where, p.lost_s, p.time_s, p.average_feed_mm_min(), p.programmed_feed_mm_min,
+                       p.rapid ? " (G0)" : "");
       if (p.visits > 1) o += fmt::format(" ({} passes)", p.visits);
       o += '\n';
     }

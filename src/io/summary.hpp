@@ -22,6 +22,9 @@ namespace cncore::io {
 // Σ dt·(1 − v/F) over the line's cycles. Lines are ranked by lost_s.
 struct SlowSpot {
   std::uint32_t line = 0;
+  // A line merged from collinear pieces (Block::last_line): the source line of its last piece,
+  // so the spot is lines line…last_line; 0: the single line `line`.
+  std::uint32_t last_line = 0;
   double lost_s = 0;
   double time_s = 0;                  // time spent on the line
   double length_mm = 0;               // distance travelled on the line
@@ -114,6 +117,7 @@ class SummaryObserver : public sim::SampleObserver {
     double feed_mm_min;  // programmed, clamped to the machine's limit
     double cap_mm_min;   // the limit itself (max feed, or rapid rate for G0)
     bool rapid;
+    std::uint32_t last_line;  // Block::last_line
   };
   const Pending* current_block(std::uint32_t line);
   void close_group();

@@ -97,6 +97,7 @@ void LineMerger::put(const Block& block) {
     last_dir_ = unit_direction(block);
     line_.end = block.end;
     line_.path_mode = block.path_mode;
+    line_.last_line = block.last_line != 0 ? block.last_line : block.line;
     return;
   }
   finish();

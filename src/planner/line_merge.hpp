@@ -18,7 +18,9 @@
 // good setting), and passes no vertex the pieces did not program. A piece
 // whose end must be held (G61 exact path, G61.1 / G9 exact stop) ends the merge: the vertex
 // stays exact. The test costs O(1) per piece (a cone of allowed directions, line_merge.cpp);
-// at most kMaxPieces per line.
+// at most kMaxPieces per line. The line keeps its first piece's source line (Block::line; what
+// the samples on it carry) and names its last piece's in Block::last_line (the reports' "lines
+// A-B").
 //
 // On by default ([motion] merge_tolerance_mm = 0.0005; 0 turns it off; off in stop mode): the
 // random 2 000-segment program cut into 100× pieces runs in the time of the original (85.89 s

@@ -142,6 +142,40 @@ TEST(Summary, SlowestSpotsRankTimeLostAgainstTheProgrammedFeed) {
   EXPECT_EQ(s.blocks, 3u);
 }
 
+// A line merged from collinear pieces 10…14 (planner/line_merge) runs as one kernel block whose
+// samples carry line 10: the spot names the whole range, in the text and the JSON.
+TEST(Summary, AMergedLineIsReportedAsTheRangeOfItsSourceLines) {
+  SummaryObserver obs(default_machine_config(), "lookahead");
+  Block merged = line_block(10, 6000);
+  merged.last_line = 14;
+  obs.on_block(merged);
+  obs.on_block(line_block(20, 6000));
+  double t = 0, x = 0;
+  obs.on_sample(at(t, 0, {x, 0, 0}));
+  for (std::uint32_t line : {10u, 20u}) {
+    for (int k = 0; k < 100; ++k) {
+      t += kTau;
+      x += (line == 10 ? 25.0 : 50.0) * kTau;  // line 10…14 at half its F6000 (100 mm/s)
+      obs.on_sample(at(t, line, {x, 0, 0}));
+    }
+  }
+  obs.on_finish();
+  const Summary& s = obs.summary();
+  ASSERT_EQ(s.slowest.size(), 2u);
+  EXPECT_EQ(s.slowest[0].line, 10u);
+  EXPECT_EQ(s.slowest[0].last_line, 14u);
+  EXPECT_NEAR(s.slowest[0].lost_s, 0.1 * 0.75, 1e-9);
+  EXPECT_EQ(s.slowest[1].line, 20u);
+  EXPECT_EQ(s.slowest[1].last_line, 0u);
+  const std::string text = format_human_summary(s, default_machine_config(), "p.ngc");
+  EXPECT_NE(text.find("lines 10-14 "), std::string::npos) << text;
+  EXPECT_NE(text.find("line 20 "), std::string::npos) << text;
+  const auto j = nlohmann::json::parse(summary_to_json(s, default_machine_config()));
+  EXPECT_EQ(j["slowest_spots"][0]["line"], 10);
+  EXPECT_EQ(j["slowest_spots"][0]["last_line"], 14);
+  EXPECT_EQ(j["slowest_spots"][1]["last_line"], 20);  // a single line: its own
+}
+
 // A loop executes line 7 twice (with line 8 between): both passes add up on one entry.
 // Each pass of line 7: 100 cycles at 25 mm/s against F3000 (50 mm/s): lost 0.1·0.5 = 0.05 s.
 TEST(Summary, RepeatedLinesAddUp) {

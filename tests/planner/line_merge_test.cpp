@@ -115,6 +115,23 @@ TEST(LineMerge, KeepsCornersFeedsStopsAndEvents) {
   }
 }
 
+TEST(LineMerge, AMergedLineCarriesTheSourceLinesOfItsFirstAndLastPiece) {
+  LineMerger m(kTol, kTurn);
+  std::vector<Block> in;
+  for (int i = 0; i < 5; ++i) {
+    in.push_back(line({1.0 * i, 0, 0}, {1.0 * i + 1, 0, 0}));
+    in.back().line = 10 + static_cast<std::uint32_t>(i);
+  }
+  in.push_back(line({5, 0, 0}, {5, 1, 0}));  // a corner: a block of its own
+  in.back().line = 20;
+  const auto out = run(m, in);
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_EQ(out[0].line, 10u);
+  EXPECT_EQ(out[0].last_line, 14u);
+  EXPECT_EQ(out[1].line, 20u);
+  EXPECT_EQ(out[1].last_line, 0u);  // one source block
+}
+
 TEST(LineMerge, FeedsThatDifferByRoundingMergeAtTheLowest) {
   // The direction correction's C of two pieces of one line differs in the last digits.
   LineMerger m(kTol, kTurn);
