@@ -3,11 +3,15 @@
 # look-ahead and stop modes against the time-optimal lower bound, with wall time, cycles per second
 # and peak memory; then the Google Benchmark executables if they are built.
 #
-#   bash bench/run.sh BUILD_DIR [--quick] [--no-gbench] [--accdec TYPE] [--only REGEX]
+#   bash bench/run.sh BUILD_DIR [--quick] [--no-gbench] [--no-stop] [--accdec TYPE]
+#                    [--machine FILE.toml] [--only REGEX]
 #
 #   --quick      skip the 1 000 000-line CAM program and the 100x refined stress test
 #   --no-gbench  skip bench_interpreter / bench_motion
+#   --no-stop    skip the stop-mode runs (stop_s and stop/b left empty)
 #   --accdec T   also pass `--accdec T` to `cncore run` (acc/dec type, issue 9), when supported
+#   --machine F  run and bound on machine F (e.g. one with a jerk limit: the bound ignores jerk,
+#                so look/b then includes what the jerk stage costs)
 #   --only RE    run only the programs whose path matches the extended regex RE
 # Environment: CNCORE_SHARED_DIR (default: <repo>/../shared) for the corpus; BENCH_OUT for the
 # output folder (default BUILD_DIR/bench-out); BENCH_TIMEOUT seconds per run (default 300).
@@ -22,12 +26,16 @@ shift
 quick=0
 gbench=1
 accdec=""
+machine=""
+stop=1
 only=""
 while [ $# -gt 0 ]; do
   case $1 in
     --quick) quick=1 ;;
     --no-gbench) gbench=0 ;;
     --accdec) accdec=${2:-}; shift ;;
+    --machine) machine=${2:-}; shift ;;
+    --no-stop) stop=0 ;;
     --only) only=${2:-}; shift ;;
     -h|--help) usage; exit 0 ;;
     *) echo "run.sh: unknown option $1" >&2; usage >&2; exit 2 ;;
@@ -129,6 +137,12 @@ fi
 # ---- Runs. ----
 extra=()
 [ -n "$accdec" ] && extra=(--accdec "$accdec")
+mach=()
+if [ -n "$machine" ]; then
+  machine=$(cd "$(dirname "$machine")" && pwd)/$(basename "$machine")
+  mach=(--machine "$machine")
+  extra+=("${mach[@]}")
+fi
 results=$out/results.tsv
 printf 'program\tblocks\tlookahead_s\tstop_s\tbound_s\tlook/bound\tstop/bound\twall_look_s\tMcycles_per_s\trss_MB\n' >"$results"
 printf '%-44s %8s %10s %10s %10s %7s %7s %8s %8s %7s\n' program blocks look_s stop_s bound_s \
@@ -139,7 +153,7 @@ for p in "${programs[@]}"; do
   name=${name#"$out"/programs/}
   name=${name#"$repo"/}
   tag=$(echo "$name" | tr '/ ' '__')
-  b=$("$bound" "$p" 2>"$out/runs/$tag.bound.err")
+  b=$("$bound" "$p" "${mach[@]}" 2>"$out/runs/$tag.bound.err")
   if [ $? -ne 0 ]; then
     echo "skip $name: cncore-bound: $(head -1 "$out/runs/$tag.bound.err")"
     continue
@@ -149,16 +163,20 @@ for p in "${programs[@]}"; do
   tm_l=$(measure "$out/runs/$tag.look.log" "$cncore" run "$p" --mode lookahead "${extra[@]}" \
     --summary "$out/runs/$tag.look.json")
   rc_l=$?
-  tm_s=$(measure "$out/runs/$tag.stop.log" "$cncore" run "$p" --mode stop "${extra[@]}" \
-    --summary "$out/runs/$tag.stop.json")
-  rc_s=$?
+  if [ $stop -eq 1 ]; then
+    tm_s=$(measure "$out/runs/$tag.stop.log" "$cncore" run "$p" --mode stop "${extra[@]}" \
+      --summary "$out/runs/$tag.stop.json")
+    rc_s=$?
+  else
+    tm_s=""; rc_s=-1
+  fi
   look_s=""; stop_s=""; cycles=""
   [ $rc_l -eq 0 ] && look_s=$(json_get "$out/runs/$tag.look.json" cycle_time_s) &&
     cycles=$(json_get "$out/runs/$tag.look.json" cycles)
   [ $rc_s -eq 0 ] && stop_s=$(json_get "$out/runs/$tag.stop.json" cycle_time_s)
   why() { [ "$1" -eq 124 ] && echo "timed out after ${tmo} s" || echo "exit $1: $(grep -m1 error "$2")"; }
   [ $rc_l -ne 0 ] && echo "  $name: lookahead run failed ($(why $rc_l "$out/runs/$tag.look.log"))"
-  [ $rc_s -ne 0 ] && echo "  $name: stop run failed ($(why $rc_s "$out/runs/$tag.stop.log"))"
+  [ $rc_s -gt 0 ] && echo "  $name: stop run failed ($(why $rc_s "$out/runs/$tag.stop.log"))"
   read -r wall rss <<<"$tm_l"
   row=$(python3 - "$name" "$blocks" "$look_s" "$stop_s" "$bound_s" "$wall" "$cycles" "$rss" <<'PY'
 import sys
