@@ -19,13 +19,10 @@ the checker's per-axis and normal rules limit at the two samples around the turn
 continuous bound passes a corner in no time and has no samples there).
 """
 import argparse
-import bisect
 import collections
 import csv
 import os
 import statistics
-import subprocess
-import tempfile
 
 import per_block
 
@@ -70,26 +67,11 @@ def fewest(w0, dist, w_end, step, top):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("program")
-    ap.add_argument("--cncore", required=True)
-    ap.add_argument("--bound", required=True)
-    ap.add_argument("--accdec", default="acceleration")
-    ap.add_argument("--machine")
-    ap.add_argument("--traj")
-    ap.add_argument("--per-block")
+    per_block.add_run_options(ap)
     ap.add_argument("--accel", type=float, default=2000.0)
     ap.add_argument("--period", type=float, default=0.001)
     a = ap.parse_args()
-    tmp = tempfile.mkdtemp(prefix="cornerloss")
-    traj = a.traj or os.path.join(tmp, "t.csv")
-    per = a.per_block or os.path.join(tmp, "b.tsv")
-    mach = ["--machine", a.machine] if a.machine else []
-    if not a.traj:
-        subprocess.run([a.cncore, "run", a.program, "--mode", "lookahead", "--accdec", a.accdec,
-                        "--trajectory", traj] + mach, check=True, stdout=subprocess.DEVNULL)
-    if not a.per_block:
-        subprocess.run([a.bound, a.program, "--per-block", per] + mach, check=True,
-                       stdout=subprocess.DEVNULL)
+    traj, per = per_block.run_and_bound(a, "cornerloss")
     segs = per_block.read_lines(per, "corner_loss")
     tau, step = a.period, a.accel * a.period * a.period
     with open(traj) as f:

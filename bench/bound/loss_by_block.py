@@ -13,11 +13,9 @@ worst lines. Times in s.
 import argparse
 import collections
 import csv
-import math
 import os
-import subprocess
-import sys
-import tempfile
+
+import per_block
 
 
 def kind_of(seg, prev):
@@ -40,23 +38,12 @@ def kind_of(seg, prev):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("program")
-    ap.add_argument("--cncore", required=True)
-    ap.add_argument("--bound", required=True)
-    ap.add_argument("--accdec", default="acceleration")
-    ap.add_argument("--machine")
+    per_block.add_run_options(ap, reuse=False)
     ap.add_argument("--model")
     ap.add_argument("--top", type=int, default=8)
     ap.add_argument("--out")
     a = ap.parse_args()
-    tmp = tempfile.mkdtemp(prefix="lossbb")
-    traj, per = os.path.join(tmp, "t.csv"), os.path.join(tmp, "b.tsv")
-    mach = ["--machine", a.machine] if a.machine else []
-    subprocess.run([a.cncore, "run", a.program, "--mode", "lookahead", "--accdec", a.accdec,
-                    "--trajectory", traj] + mach, check=True, stdout=subprocess.DEVNULL)
-    model = ["--model", a.model] if a.model else []
-    subprocess.run([a.bound, a.program, "--per-block", per] + mach + model, check=True,
-                   stdout=subprocess.DEVNULL)
+    traj, per = per_block.run_and_bound(a, "lossbb", ["--model", a.model] if a.model else [])
     run_t = collections.Counter()
     tau = None
     last_t = 0.0

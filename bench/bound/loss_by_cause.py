@@ -26,8 +26,6 @@ import collections
 import csv
 import math
 import os
-import subprocess
-import tempfile
 
 import per_block
 
@@ -73,26 +71,11 @@ def fit_a(L, v0, v1, cap, time):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("program")
-    ap.add_argument("--cncore", required=True)
-    ap.add_argument("--bound", required=True)
-    ap.add_argument("--accdec", default="acceleration")
-    ap.add_argument("--machine")
-    ap.add_argument("--traj")
-    ap.add_argument("--per-block")
+    per_block.add_run_options(ap)
     ap.add_argument("--top", type=int, default=0)
     ap.add_argument("--cycles", help="write one row per cycle: t s step loss cause line")
     a = ap.parse_args()
-    tmp = tempfile.mkdtemp(prefix="lossbc")
-    traj = a.traj or os.path.join(tmp, "t.csv")
-    per = a.per_block or os.path.join(tmp, "b.tsv")
-    mach = ["--machine", a.machine] if a.machine else []
-    if not a.traj:
-        subprocess.run([a.cncore, "run", a.program, "--mode", "lookahead", "--accdec", a.accdec,
-                        "--trajectory", traj] + mach, check=True, stdout=subprocess.DEVNULL)
-    if not a.per_block:
-        subprocess.run([a.bound, a.program, "--per-block", per] + mach, check=True,
-                       stdout=subprocess.DEVNULL)
+    traj, per = per_block.run_and_bound(a, "lossbc")
     B = per_block.read_blocks(per)
     n = len(B)
     S = [0.0]

@@ -1,8 +1,41 @@
-"""Shared by reference_profile.py, discrete_reference.py and loss_by_cause.py: the `cncore-bound --per-block` TSV
-of a program of lines, and points along its path for the trajectory CSV they write."""
+"""Shared by the scripts of bench/bound: the `cncore-bound --per-block` TSV of a program of lines,
+points along its path for the trajectory CSV they write, and running `cncore run` and
+`cncore-bound` on a program."""
 import csv
 import math
+import os
+import subprocess
 import sys
+import tempfile
+
+
+def add_run_options(ap, reuse=True):
+    """The program and the tools of a script that compares a run with the bound; reuse: also
+    --traj / --per-block, files of an earlier run used instead of running again."""
+    ap.add_argument("program")
+    ap.add_argument("--cncore", required=True)
+    ap.add_argument("--bound", required=True)
+    ap.add_argument("--accdec", default="acceleration")
+    ap.add_argument("--machine")
+    if reuse:
+        ap.add_argument("--traj")
+        ap.add_argument("--per-block")
+
+
+def run_and_bound(a, prefix, bound_options=()):
+    """(trajectory CSV, per-block TSV) of the program: `cncore run --mode lookahead` and
+    `cncore-bound --per-block` into a temporary folder, unless --traj / --per-block name them."""
+    tmp = tempfile.mkdtemp(prefix=prefix)
+    traj = getattr(a, "traj", None) or os.path.join(tmp, "t.csv")
+    per = getattr(a, "per_block", None) or os.path.join(tmp, "b.tsv")
+    mach = ["--machine", a.machine] if a.machine else []
+    if not getattr(a, "traj", None):
+        subprocess.run([a.cncore, "run", a.program, "--mode", "lookahead", "--accdec", a.accdec,
+                        "--trajectory", traj] + mach, check=True, stdout=subprocess.DEVNULL)
+    if not getattr(a, "per_block", None):
+        subprocess.run([a.bound, a.program, "--per-block", per] + mach + list(bound_options),
+                       check=True, stdout=subprocess.DEVNULL)
+    return traj, per
 
 
 def read_blocks(path):
