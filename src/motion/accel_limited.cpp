@@ -493,6 +493,7 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       head_rd_(buffer.capacity(), 1.0),
       tail_rd_(buffer.capacity(), 1.0),
       s0_mm_(buffer.capacity(), 0.0),
+      pieces_(buffer.capacity(), SigmaPieces{}),
       arc_g_(buffer.capacity(), 0.0),
       arc_rho_(buffer.capacity(), 0.0),
       lin_r_(buffer.capacity(), 1.0),
@@ -584,6 +585,7 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   head_mm_[slot] = tail_mm_[slot] = 0;
   head_r_[slot] = tail_r_[slot] = 1;
   head_rd_[slot] = tail_rd_[slot] = 1;
+  refresh_pieces(slot);
   // Head zones reaching here from earlier segments (8.); expired ones are dropped.
   for (std::size_t k = 0; k < n_carries_;) {
     if (carries_[k].until_mm <= s.s0_mm) {
@@ -975,6 +977,7 @@ void AccelLimitedAccDec::add_head(std::size_t slot, double mm, double r, double 
   head_r_[slot] = head_mm_[slot] > 0 ? std::min(head_r_[slot], r) : r;
   head_rd_[slot] = head_mm_[slot] > 0 ? std::min(head_rd_[slot], r_dec) : r_dec;
   head_mm_[slot] = std::max(head_mm_[slot], mm);
+  refresh_pieces(slot);
 }
 
 void AccelLimitedAccDec::carry(double until_mm, double r) {
@@ -1159,26 +1162,39 @@ double AccelLimitedAccDec::sigma_at(double pos_mm) const {
   return sigma0_[slot] + seg_sigma(slot, pos_mm - s.s0_mm);
 }
 
-double AccelLimitedAccDec::seg_sigma(std::size_t slot, double x_mm) const {
+void AccelLimitedAccDec::refresh_pieces(std::size_t slot) {
+  // Pieces [0, h), [h, L − t), [L − t, L] (overlapping zones: the lower r of both). σ at the
+  // piece ends is summed in the order seg_sigma() adds the pieces, so both give the same double
+  // as summing the pieces up to x one by one (0 + y = y; an empty piece adds r·0 = 0).
   const double len = len_mm_[slot];
   const double r = ratio_[slot];
-  const double x = std::clamp(x_mm, 0.0, len);
-  if (head_mm_[slot] <= 0 && tail_mm_[slot] <= 0) return r * x;
-  // Pieces [0, h), [h, L − t), [L − t, L] (overlapping zones: the lower r of both).
   const double h = std::min(head_mm_[slot], len);
   const double t0 = std::max(0.0, len - tail_mm_[slot]);
   const double pts[4] = {0, std::min(h, t0), std::max(h, t0), len};
-  double out = 0;
+  double rate[3];
   for (std::size_t k = 0; k < 3; ++k) {
-    const double lo = pts[k], hi = std::min(pts[k + 1], x);
-    if (hi <= lo) continue;
     const double mid = 0.5 * (pts[k] + pts[k + 1]);
-    double rate = r;
-    if (mid < h) rate = std::min(rate, head_rd_[slot]);
-    if (mid > t0) rate = std::min(rate, tail_rd_[slot]);
-    out += rate * (hi - lo);
+    rate[k] = r;
+    if (mid < h) rate[k] = std::min(rate[k], head_rd_[slot]);
+    if (mid > t0) rate[k] = std::min(rate[k], tail_rd_[slot]);
   }
-  return out;
+  SigmaPieces& p = pieces_[slot];
+  p.len = len;
+  p.p1 = pts[1];
+  p.p2 = pts[2];
+  p.rate0 = rate[0];
+  p.rate1 = rate[1];
+  p.rate2 = rate[2];
+  p.sig1 = pts[1] > 0 ? rate[0] * pts[1] : 0.0;
+  p.sig2 = pts[2] > pts[1] ? p.sig1 + rate[1] * (pts[2] - pts[1]) : p.sig1;
+}
+
+double AccelLimitedAccDec::seg_sigma(std::size_t slot, double x_mm) const {
+  const SigmaPieces& p = pieces_[slot];
+  const double x = std::clamp(x_mm, 0.0, p.len);
+  if (x <= p.p1) return x > 0 ? p.rate0 * x : 0.0;
+  if (x <= p.p2) return p.sig1 + p.rate1 * (x - p.p1);
+  return p.sig2 + p.rate2 * (x - p.p2);
 }
 
 double AccelLimitedAccDec::r_span(double from_mm, double to_mm, std::uint64_t* skip) const {
@@ -1548,6 +1564,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
       tail_rd_[sx] = rjd;
     }
     tail_mm_[sx] = std::max(tail_mm_[sx], covered);
+    refresh_pieces(sx);
     update_r(k);
     first = k;
     ++walked;

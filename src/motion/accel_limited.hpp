@@ -198,6 +198,15 @@ class AccelLimitedAccDec final : public AccDec {
   // head_rd_ and tail_rd_ ≥ them are the zones' r for decreases (σ, the braking bounds).
   Buf<double> len_mm_, head_mm_, head_r_, tail_mm_, tail_r_, head_rd_, tail_rd_;
   Buf<double> s0_mm_;  // the segment's s0_mm (r_span() reads it without the Segment)
+  // Per buffer slot, σ over the segment as pieces [0, p1), [p1, p2), [p2, len] of rates
+  // rate0..2 and σ sig1, sig2 at p1, p2 (no zone: p1 = 0, p2 = len), from len, r and the zones
+  // by refresh_pieces() whenever one of them changes: seg_sigma() of every cycle reads one
+  // cache line instead of six arrays. 64 bytes.
+  struct SigmaPieces {
+    double len, p1, p2, sig1, sig2, rate0, rate1, rate2;
+  };
+  Buf<SigmaPieces> pieces_;
+  void refresh_pieces(std::size_t slot);
   // Per buffer slot, arcs whose plane axes share normal and tangential acceleration: the axis
   // bound g (0: none), the radius of curvature, and the ratio of the linear axis shares alone —
   // an override decrease decelerates with what the current speed leaves (5.).
