@@ -1748,6 +1748,47 @@ double AccelLimitedAccDec::reference_bound(double or_ratio) const {
   return out;
 }
 
+double AccelLimitedAccDec::pair_rise(const Segment& s) const {
+  // 12. A pair across one joint between two lines. The zones (7.) hold every pair within
+  // [j − 2V, j + V] to r_j, sized for the joint's passing speed V and for any sample position;
+  // on paths whose corners lie a few steps apart they cover the whole path, and the speed
+  // rises at the floor between corners that are passed far below their caps. For an increase
+  // the exact limit is known here: u1 (the step just taken) and the joint j. With the pair
+  // spanning j alone (the step before started in a, the next one cannot leave b), 7.'s
+  // second difference at the tool for u2 = u1 + D is (u2 − u1)·S + c·(S − E),
+  // c ∈ [u1 − u2, u1], linear in c: its extremes are D·E (within a's r) and u2·S − u1·E, so
+  //     |u1·(S_i − E_i) + D·S_i| ≤ a_i  on every axis,  D ≤ min(r_a, r_b)·A0,
+  // an interval of D that holds 0 when the tool's last pair did (u1 met the cap). Tangential:
+  // D ≤ A0; normal: the step crossing j and the one beside it are ≤ Vg (the joint's cap, or 9.'s
+  // exact limit). Decreases keep the zones' r (σ, the braking bounds, 3.): only the rise
+  // changes. Returns 0 where this does not apply (the zones' r stays).
+  const double u1 = step_;
+  const double from = pos_mm_ - u1, to = pos_mm_ + u1 + a0_;
+  const bool behind = from < s.s0_mm, ahead = to >= s.end_mm();
+  if (behind == ahead) return 0;  // none (the line's own rise above) or two joints
+  const std::uint64_t ia = behind ? cur_ - 1 : cur_, ib = ia + 1;
+  if (ia < buf_.begin_index() || ib >= buf_.end_index()) return 0;
+  const Segment& a = buf_[ia];
+  const Segment& b = buf_[ib];
+  if (a.kind != ItemKind::kMotion || b.kind != ItemKind::kMotion || a.arc || b.arc) return 0;
+  if (a.s0_mm > from || b.end_mm() <= to || a.end_mm() != b.s0_mm) return 0;
+  const AxisVec e = a.end_direction(), sd = b.start_direction();
+  double c = 0;
+  if (!linear_turn_cos(e, sd, c)) return 0;
+  constexpr double kMargin = 1 - 1e-6;
+  double d = std::min(ratio_[buf_.slot(ia)], ratio_[buf_.slot(ib)]) * kMargin * a0_;
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (!lim_.axis_on[i] || lim_.axis_amax_pc2[i] <= 0) continue;
+    const double ai = kMargin * lim_.axis_amax_pc2[i];
+    const double t = u1 * (sd[i] - e[i]);
+    if (std::abs(t) > ai) return 0;
+    if (std::abs(sd[i]) <= 1e-12) continue;
+    // −a_i ≤ t + D·S_i ≤ a_i: D ≤ (a_i − t)/S_i for S_i > 0, (−a_i − t)/S_i for S_i < 0.
+    d = std::min(d, sd[i] > 0 ? (ai - t) / sd[i] : (-ai - t) / sd[i]);
+  }
+  return std::max(0.0, d);
+}
+
 double AccelLimitedAccDec::after_corner() {
   // The tool's segment b and the joint j at its start: the last step crossed j alone (it started
   // in the line a before j, recorded by step()), b is a line and j has a joint cap.
@@ -2019,6 +2060,9 @@ void AccelLimitedAccDec::step(const CycleInput& in) {
     if (lag_ == 0 && !s.arc && pos_mm_ - step_ >= s.s0_mm &&
         pos_mm_ + step_ + ratio_[slot] * a0_ < s.end_mm()) {
       line_rise = ratio_[slot] * a0_;
+    } else if (lag_ == 0 && !s.arc && !in.hold && !lim_.bound_resultant &&
+               !(in.stop_mm > pos_mm_ && in.stop_mm <= pos_mm_ + step_ + a0_)) {
+      line_rise = pair_rise(s);
     }
     // Past the corner just crossed, its head zone (7.) is replaced by the exact limit: within
     // b before its tail zone, b's own r.

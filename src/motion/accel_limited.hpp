@@ -121,6 +121,7 @@ class AccelLimitedAccDec final : public AccDec {
   // this cycle's step from the second difference around the crossing (kInf: none; the joint cap
   // then stays). Clears the joint cap when it returns a limit.
   double after_corner();
+  double pair_rise(const planner::Segment& s) const;
   // 11. Centred corners: the joint (j, Vg, the cap's c), the directions and their cosine, and
   // the highest r from the tool up to j.
   struct Centre {
