@@ -1287,7 +1287,10 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   // segment between a sharp and a gentle corner otherwise got the gentle one's zone sized for
   // the segments' caps (0.1 mm of line-contouring-xz braked at 0.22·A for a 3.6 µm segment).
   // Used as V it becomes this joint's cap (on_joint), so the zone's premise holds either way.
-  if (lag_ == 0 && corner < around && prev_.valid && prev_.index_b == index_a) {
+  // Also at a joint with no cap of its own (a gentle turn the top speed passes): its zone, sized
+  // for the segments' caps, reached 2·V_top back over the braking for the corner before it
+  // (0.33 mm at 0.3·A0 before a 30° corner of line-contouring-xz: 22.061 → 22.023 s).
+  if (lag_ == 0 && prev_.valid && prev_.index_b == index_a) {
     const double vp = prev_.vg / 0.999;  // its cap, or the caps around it when it had none
     for (int it = 0; it < 8; ++it) {
       const double reach = std::sqrt(vp * vp + 2 * a0_ * (a.length_mm + 2 * v0)) + 2 * a0_;

@@ -828,6 +828,63 @@ TEST(AccelLimited, RosetteOfShortChordsBrakesAndRisesAtTheZonesOwnLimits) {
   EXPECT_LE(r.time_s(), 1.421);
 }
 
+// A circle of 16 µm chords with its coordinates rounded to 0.0001 inch (circle_small_segments of
+// the LinuxCNC tests, here `chords` of them from the top): the rounding makes corners of 4–12°
+// every few chords, whose zones (7.) cover the whole path, sized for each corner's cap.
+Prog rounded_circle(int chords) {
+  Prog p;
+  const double r = 25.4, q = 0.00254;
+  p.rapid_to(Vec3{0, r, 0});
+  for (int i = 1; i <= chords; ++i) {
+    const double a = 2 * kPi * i / 10000;
+    p.line_to(Vec3{std::round(r * std::sin(a) / q) * q, std::round(r * std::cos(a) / q) * q, 0},
+              9999 * 25.4);
+  }
+  return p;
+}
+
+// 12.: a pair of steps across one joint between lines rises by its exact limit, not by the
+// zones' r. 2 500 chords: 3.462 s with the zones' r (before 12.), 3.414 s.
+TEST(AccelLimited, PairsAcrossOneJointRiseByTheirExactLimit) {
+  const MachineConfig m = centred_machine();
+  const RunResult r = run_checked(m, rounded_circle(2500));
+  std::printf("rounded circle of 2 500 chords: %.3f s\n", r.time_s());
+  EXPECT_LE(r.time_s(), 3.44);
+}
+
+TEST(AccelLimited, PairsAcrossOneJointUnderAHoldOrAnOverrideDropAtEveryCycle) {
+  hold_drop_rise_at_every_cycle(centred_machine(), rounded_circle(150), 20, 60, 0.01);
+}
+
+// A gentle joint (0.5°, no cap of its own at the top speed) 0.2 mm after a 30° corner: its zone
+// was sized for the top speed and reached 2·V = 0.33 mm back, over the braking for the 30°
+// corner, which then ran at the zone's r (1.45 instead of 2 µm/cycle² on line-contouring-xz's
+// pattern). Sized for what the tool can reach from the 30° corner's cap (7.), the braking before
+// that corner runs at the full Amax.
+TEST(AccelLimited, GentleJointAfterACornerIsZonedForTheSpeedItCanReach) {
+  const MachineConfig m = centred_machine();
+  Prog p;
+  Vec3 at{0, 0, 0};
+  for (auto [len, deg] : {std::pair{20.0, 0.0}, {0.2, 30.0}, {20.0, 30.5}}) {
+    at = at + Vec3{len * std::cos(deg * kPi / 180), len * std::sin(deg * kPi / 180), 0};
+    p.line_to(at, 10000);
+  }
+  const RunResult r = run_checked(m, p);
+  std::size_t k = 1;
+  while (k < r.samples.size() && r.samples[k].position[kX] < 20.0) ++k;  // the crossing
+  ASSERT_GT(k, 20u);
+  const double a0_mm = m.max_accel_mm_s2 * m.period_s * m.period_s;
+  auto step = [&](std::size_t i) {
+    return norm(r.samples[i].position.xyz() - r.samples[i - 1].position.xyz());
+  };
+  // The braking cycles before the crossing's last few (where the corner's own zone and cap act).
+  int full = 0;
+  for (std::size_t i = k - 16; i < k - 4; ++i) {
+    if (step(i) - step(i + 1) >= 0.95 * a0_mm) ++full;
+  }
+  EXPECT_EQ(full, 12);
+}
+
 // An override drop while the tool brakes through a gentle corner's zone for a slower feed after
 // it (seed 23 of RandomProgramsWithCoupledAxesAndLines once σ ran a zone's decreases at their own
 // r, 7.): the feed recovery decelerated at the zone's r for increases and fell behind the feed
