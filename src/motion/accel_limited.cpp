@@ -329,6 +329,17 @@
 //    22.575 → 22.348 s, braid_cut2d 20.526 → 20.338 s). Cost: only within 3·Vg + 3·A0 of such a
 //    corner, a few closed forms and two tree updates (the cap's leaf left out and put back).
 //
+// 12. Rises across one joint (pair_rise()). The zones (7.) hold a pair of steps anywhere in
+//    [j − 2V, j + V] to r_j, sized for the corner's V and any sample position. For an increase
+//    the cycle knows both: the step just taken u1 and where the joint lies. When the pair spans
+//    exactly one joint between two lines (no filter, no hold, no stop in reach, no resultant
+//    option), its second difference has the extremes D·E and u1·(S − E) + D·S (7., c linear),
+//    so D is the largest value with |u1·(S_i − E_i) + D·S_i| ≤ a_i on every axis and
+//    D ≤ min(r_a, r_b)·A0. Decreases keep the zones (σ): the braking plans do not change.
+//    circle_small_segments 12.926 → 12.768 s; the sampled reference (bench/bound, cncore-sref)
+//    runs it in 10.924 s: what is left there is the joint caps' hold of the steps beside the
+//    crossing and the zones' r for decreases, sized for the caps rather than the speeds run.
+//
 // Without a filter the tool position is the commanded position and at rest means step 0.
 #include "motion/accel_limited.hpp"
 
