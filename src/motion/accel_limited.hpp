@@ -273,6 +273,20 @@ class AccelLimitedAccDec final : public AccDec {
     AxisVec a_start_dir;
     double a_len_mm = 0, a_sweep_rad = 0;
   } prev_;
+  // The zone of the last joint (7.), where 13. may size it again for the speed the next joint's
+  // cap leaves there: only a plain one (two lines, no chain, no filter, inside a and b).
+  struct LastZone {
+    bool valid = false;
+    std::uint64_t index_a = 0;
+    double j_mm = 0, v = 0, r_hi = 1, r_top = 1, floor = 0;
+    AxisVec e, s;
+  } last_zone_;
+  // 13.: the zone of the joint before `index_a` sized again for the cap vc of the joint at its
+  // end (true: changed).
+  bool rezone_before(const LastZone& z, std::uint64_t index_b, double vc);
+  double plain_zone_d(const AxisVec& e, const AxisVec& s, double r_hi, double v,
+                      bool decreases_only) const;
+  void resigma(std::uint64_t first, std::uint64_t index_a);
 
   // The last step left the line under the tool at its end j_mm (direction e there): 9.
   struct Crossed {

@@ -885,6 +885,35 @@ TEST(AccelLimited, GentleJointAfterACornerIsZonedForTheSpeedItCanReach) {
   EXPECT_EQ(full, 12);
 }
 
+// 13.: a gentle joint (1.5° on a diagonal, its zone at the floor for its own cap of ~60
+// µm/cycle) 0.08 mm before a 40° corner: the 40° corner's braking bound keeps the speed there
+// far lower, and the zone sized again for it lets the braking before the gentle joint run at the
+// full Amax (0.8 instead of 2 µm/cycle² with the zone sized for the gentle joint's cap: 0.422 →
+// 0.409 s).
+TEST(AccelLimited, GentleJointBeforeASharpCornerIsZonedForTheSpeedItsBrakingLeaves) {
+  const MachineConfig m = centred_machine();
+  Prog p;
+  Vec3 at{0, 0, 0};
+  for (auto [len, deg] : {std::pair{20.0, 45.0}, {0.08, 46.5}, {20.0, 86.5}}) {
+    at = at + Vec3{len * std::cos(deg * kPi / 180), len * std::sin(deg * kPi / 180), 0};
+    p.line_to(at, 10000);
+  }
+  const RunResult r = run_checked(m, p);
+  const double gentle_x = 20 * std::cos(kPi / 4);
+  std::size_t k = 1;
+  while (k < r.samples.size() && r.samples[k].position[kX] < gentle_x) ++k;  // its crossing
+  ASSERT_GT(k, 20u);
+  const double a0_mm = m.max_accel_mm_s2 * m.period_s * m.period_s;
+  auto step = [&](std::size_t i) {
+    return norm(r.samples[i].position.xyz() - r.samples[i - 1].position.xyz());
+  };
+  int full = 0;
+  for (std::size_t i = k - 12; i < k; ++i) {
+    if (step(i) - step(i + 1) >= 0.95 * a0_mm) ++full;
+  }
+  EXPECT_EQ(full, 12);
+}
+
 // An override drop while the tool brakes through a gentle corner's zone for a slower feed after
 // it (seed 23 of RandomProgramsWithCoupledAxesAndLines once σ ran a zone's decreases at their own
 // r, 7.): the feed recovery decelerated at the zone's r for increases and fell behind the feed
