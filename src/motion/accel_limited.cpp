@@ -1376,6 +1376,13 @@ bool AccelLimitedAccDec::rezone_before(const LastZone& z, std::uint64_t index_b,
   const double rj = std::max(d / a0_, 1e-6);
   const double rjd = std::max(rj, std::max(d, plain_zone_d(z.e, z.s, z.r_hi, v, true)) / a0_);
   const std::size_t sa = buf_.slot(ia), sb = buf_.slot(index_b);
+  // A joint without a cap gets one only between segments of a step or more (as in 7.).
+  const std::uint32_t g = owner_[3 * sb + 2];
+  if (g == kNone) {
+    double turn = 0;
+    for (std::size_t i = 0; i < kMaxAxes; ++i) turn = std::max(turn, std::abs(z.s[i] - z.e[i]));
+    if (!(z.v * turn >= 0.25 * a0_ && a.length_mm >= 2 * v && b.length_mm >= v)) return false;
+  }
   const bool zoned = rj < z.r_top;
   tail_mm_[sa] = zoned ? 2 * v : 0.0;
   tail_r_[sa] = zoned ? rj : 1.0;
@@ -1388,7 +1395,6 @@ bool AccelLimitedAccDec::rezone_before(const LastZone& z, std::uint64_t index_b,
   update_r(ia);
   update_r(index_b);
   resigma(ia, index_b);
-  const std::uint32_t g = owner_[3 * sb + 2];
   if (v < (g != kNone ? caps_[g].v : kInf)) {
     insert_joint_cap(sa, sb, z.j_mm, a.length_mm, v);
     if (prev_.valid && prev_.index_a == ia) prev_.vg = std::min(prev_.vg, v);
@@ -1426,10 +1432,21 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   // (0.33 mm at 0.3·A0 before a 30° corner of line-contouring-xz: 22.061 → 22.023 s).
   if (lag_ == 0 && prev_.valid && prev_.index_b == index_a) {
     const double vp = prev_.vg / 0.999;  // its cap, or the caps around it when it had none
+    double v = v0;
     for (int it = 0; it < 8; ++it) {
-      const double reach = std::sqrt(vp * vp + 2 * a0_ * (a.length_mm + 2 * v0)) + 2 * a0_;
-      if (reach >= v0) break;
-      v0 = reach;
+      const double reach = std::sqrt(vp * vp + 2 * a0_ * (a.length_mm + 2 * v)) + 2 * a0_;
+      if (reach >= v) break;
+      v = reach;
+    }
+    // (A joint without a cap gets one only where its turn at the top speed takes a quarter of
+    // A0 or more, between segments of a step or more: a cap at every joint of tiny segments,
+    // several per cycle, each entering and leaving the trees, cost stress_test 40 % of its step
+    // rate, and at the straight joints of long merged lines 20 %.)
+    double turn = 0;
+    for (std::size_t i = 0; i < kMaxAxes; ++i) turn = std::max(turn, std::abs(s[i] - e[i]));
+    if (corner < around ||
+        (around * turn >= 0.25 * a0_ && a.length_mm >= 2 * v && b.length_mm >= v)) {
+      v0 = v;
     }
   }
   // At gentle corners the segments' caps (the machine's top speed) are far above a CAM
