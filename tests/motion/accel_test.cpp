@@ -11,9 +11,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <initializer_list>
 #include <iomanip>
 #include <numbers>
 #include <string>
+#include <utility>
 
 #include "limits.hpp"
 #include "motion_test_util.hpp"
@@ -856,6 +858,32 @@ TEST(AccelLimited, PairsAcrossOneJointUnderAHoldOrAnOverrideDropAtEveryCycle) {
   hold_drop_rise_at_every_cycle(centred_machine(), rounded_circle(150), 20, 60, 0.01);
 }
 
+// A polyline from the origin: (length mm, direction in degrees in the XY plane) per line.
+Prog xy_polyline(std::initializer_list<std::pair<double, double>> len_deg, double feed) {
+  Prog p;
+  Vec3 at{0, 0, 0};
+  for (auto [len, deg] : len_deg) {
+    at = at + Vec3{len * std::cos(deg * kPi / 180), len * std::sin(deg * kPi / 180), 0};
+    p.line_to(at, feed);
+  }
+  return p;
+}
+
+// How many of the cycles [from, to) slowed down by at least 0.95·Amax·τ², measured from the
+// samples' chords.
+int full_braking_cycles(const RunResult& r, const MachineConfig& m, std::size_t from,
+                        std::size_t to) {
+  const double a0_mm = m.max_accel_mm_s2 * m.period_s * m.period_s;
+  auto step = [&](std::size_t i) {
+    return norm(r.samples[i].position.xyz() - r.samples[i - 1].position.xyz());
+  };
+  int full = 0;
+  for (std::size_t i = from; i < to; ++i) {
+    if (step(i) - step(i + 1) >= 0.95 * a0_mm) ++full;
+  }
+  return full;
+}
+
 // A gentle joint (0.5°, no cap of its own at the top speed) 0.2 mm after a 30° corner: its zone
 // was sized for the top speed and reached 2·V = 0.33 mm back, over the braking for the 30°
 // corner, which then ran at the zone's r (1.45 instead of 2 µm/cycle² on line-contouring-xz's
@@ -863,26 +891,12 @@ TEST(AccelLimited, PairsAcrossOneJointUnderAHoldOrAnOverrideDropAtEveryCycle) {
 // that corner runs at the full Amax.
 TEST(AccelLimited, GentleJointAfterACornerIsZonedForTheSpeedItCanReach) {
   const MachineConfig m = centred_machine();
-  Prog p;
-  Vec3 at{0, 0, 0};
-  for (auto [len, deg] : {std::pair{20.0, 0.0}, {0.2, 30.0}, {20.0, 30.5}}) {
-    at = at + Vec3{len * std::cos(deg * kPi / 180), len * std::sin(deg * kPi / 180), 0};
-    p.line_to(at, 10000);
-  }
-  const RunResult r = run_checked(m, p);
+  const RunResult r = run_checked(m, xy_polyline({{20.0, 0.0}, {0.2, 30.0}, {20.0, 30.5}}, 10000));
   std::size_t k = 1;
   while (k < r.samples.size() && r.samples[k].position[kX] < 20.0) ++k;  // the crossing
   ASSERT_GT(k, 20u);
-  const double a0_mm = m.max_accel_mm_s2 * m.period_s * m.period_s;
-  auto step = [&](std::size_t i) {
-    return norm(r.samples[i].position.xyz() - r.samples[i - 1].position.xyz());
-  };
   // The braking cycles before the crossing's last few (where the corner's own zone and cap act).
-  int full = 0;
-  for (std::size_t i = k - 16; i < k - 4; ++i) {
-    if (step(i) - step(i + 1) >= 0.95 * a0_mm) ++full;
-  }
-  EXPECT_EQ(full, 12);
+  EXPECT_EQ(full_braking_cycles(r, m, k - 16, k - 4), 12);
 }
 
 // 13.: a gentle joint (1.5° on a diagonal, its zone at the floor for its own cap of ~60
@@ -892,26 +906,13 @@ TEST(AccelLimited, GentleJointAfterACornerIsZonedForTheSpeedItCanReach) {
 // 0.409 s).
 TEST(AccelLimited, GentleJointBeforeASharpCornerIsZonedForTheSpeedItsBrakingLeaves) {
   const MachineConfig m = centred_machine();
-  Prog p;
-  Vec3 at{0, 0, 0};
-  for (auto [len, deg] : {std::pair{20.0, 45.0}, {0.08, 46.5}, {20.0, 86.5}}) {
-    at = at + Vec3{len * std::cos(deg * kPi / 180), len * std::sin(deg * kPi / 180), 0};
-    p.line_to(at, 10000);
-  }
-  const RunResult r = run_checked(m, p);
+  const RunResult r =
+      run_checked(m, xy_polyline({{20.0, 45.0}, {0.08, 46.5}, {20.0, 86.5}}, 10000));
   const double gentle_x = 20 * std::cos(kPi / 4);
   std::size_t k = 1;
   while (k < r.samples.size() && r.samples[k].position[kX] < gentle_x) ++k;  // its crossing
   ASSERT_GT(k, 20u);
-  const double a0_mm = m.max_accel_mm_s2 * m.period_s * m.period_s;
-  auto step = [&](std::size_t i) {
-    return norm(r.samples[i].position.xyz() - r.samples[i - 1].position.xyz());
-  };
-  int full = 0;
-  for (std::size_t i = k - 12; i < k; ++i) {
-    if (step(i) - step(i + 1) >= 0.95 * a0_mm) ++full;
-  }
-  EXPECT_EQ(full, 12);
+  EXPECT_EQ(full_braking_cycles(r, m, k - 12, k), 12);
 }
 
 // An override drop while the tool brakes through a gentle corner's zone for a slower feed after
