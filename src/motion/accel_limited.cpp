@@ -45,10 +45,16 @@
 //        A step below the bound leaves more room, so the next bound is ≥ (this step) − r·A0:
 //        the deceleration it asks for never exceeds the segment's A_seg = r·A0. The minimum of
 //        several such bounds has the same property.
-//    (iii) A cap is *active* (its plain V applies) for steps starting in [c, e); before c it
-//        acts through its K. At c the bound is already ≤ √(A0² + V²) − A0 < V, so switching
-//        to V never needs a deceleration step; with V > 0 the tool crosses c as soon as the
-//        distance left is ≤ V (B ≥ d ⇔ V ≥ d), no Zeno approach.
+//    (iii) A cap is *active* (its plain V applies) for steps starting in [e_c, e), e_c its
+//        entry; before e_c it acts through its K. At the point with σ(c) − σ(p) = V the bound
+//        is exactly V (√(A0² + V² + 2·A0·V) − A0 = V, and in the lattice form below
+//        √((V − A0/2)² + 2·A0·V) − A0/2 = V), so e_c is that point (entry_mm(); ≤ c − V as
+//        r ≤ 1): switching to V there never needs a deceleration step, and from there every
+//        step ≤ V meets the cap. (At c the bound is √(A0² + V²) − A0, 0.09·V for V = 0.3·A0:
+//        with e_c = c the tool crawled towards a small cap in a zone of low r, 2.6 → 0.4
+//        µm/cycle over 10 cycles before a 68° corner of cap 1.8 on line-contouring-xz.) On an
+//        arc where 10. applies e_c stays at c (c − V for a lattice key): 10.'s curve ends at the
+//        first entry, and the later, lower one leaves it more (arc_time 4.102 → 4.092 s).
 //    Stops use the exact lattice form instead (V = 0 would never be reached with (ii)):
 //        (x + A0/2)² ≤ A0²/4 + 2·A0·(σ(stop) − σ(s)).
 //    Following it the steps are x, x − A0, …, A0 with the last step landing exactly on the
@@ -70,7 +76,8 @@
 //    key instead, K = (V − A0/2)² + 2·A0·σ(c), x ≤ √(K − 2·A0·σ(s)) − A0/2: following it the steps
 //    are exactly x, x − A0, …, and a step landing at or after c has (x − A0/2)² ≤ (V − A0/2)², so
 //    x ≤ V. Its bound is V at c − V and may reach 0 just before c when V < A0 (the last lattice
-//    step can be larger than V and then lands short of c), so such a cap is active from c − V.
+//    step can be larger than V and then lands short of c), so such a cap is active from c − V
+//    at the latest (e_c, (iii)).
 //
 // 4. Forward pass = the cycle:  u = min(u_prev + r·A0, caps active, B(min K), stop bound), r the
 // lowest
@@ -700,7 +707,7 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
         // An active cap keeps its earlier release position in release_ (≤ e): step() moves it
         // on when the tool gets there, once per window's length instead of one tree update per
         // block (an extended cap is the tree's minimum, so each update walked to the root).
-        if (state_[g] != State::kActive && pos_mm_ >= entry_mm(caps_[g])) activate(g);
+        if (state_[g] != State::kActive && pos_mm_ >= caps_[g].entry) activate(g);
         continue;
       }
     }
@@ -882,17 +889,19 @@ void AccelLimitedAccDec::insert(std::size_t pos, const Cap& cap) {
   owner_[pos] = static_cast<std::uint32_t>(g);
   where_[g] = static_cast<std::uint32_t>(pos);
   caps_[g] = cap;
-  if (pos_mm_ >= entry_mm(cap)) {
+  const double entry = entry_mm(cap);
+  caps_[g].entry = entry;
+  if (pos_mm_ >= entry) {
     activate(g);
     return;
   }
   state_[g] = State::kApproaching;
-  set_keys(g);
+  set_keys(g, entry);
 }
 
-void AccelLimitedAccDec::set_keys(std::size_t g) {
+void AccelLimitedAccDec::set_keys(std::size_t g, double entry) {
   const Cap& cap = caps_[g];
-  entry_.set(g, entry_mm(cap));
+  entry_.set(g, entry);
   const double k_sigma = 2 * a0_ * cap.sigma_c;
   if (cap.lattice) {
     const double h = cap.v - 0.5 * a0_;
@@ -913,11 +922,72 @@ void AccelLimitedAccDec::move(std::size_t from, std::size_t to) {
   where_[g] = static_cast<std::uint32_t>(to);
 }
 
-double AccelLimitedAccDec::entry_mm(const Cap& cap) {
-  // A lattice key's bound is V one step before c and may fall to 0 just before c when V < A0
-  // (the lattice's last step can be larger than V and must then land short of c): such a cap
-  // takes over one step earlier, at c − V, where any step ≤ V is allowed anyway.
-  return cap.lattice ? cap.c_mm - cap.v : cap.c_mm;
+double AccelLimitedAccDec::entry_mm(const Cap& cap) const {
+  // A cap takes over where its key's bound has come down to V, σ(c) − σ(e) = V (3. (iii)).
+  // A feed cap's V follows the override: it takes over at c. On an arc where 10. applies, and
+  // where the search meets an event item, at c − V for a lattice key, else c (later, lower).
+  const double late = cap.lattice ? cap.c_mm - cap.v : cap.c_mm;
+  if (cap.feed) return late;
+  std::size_t slot = 0;
+  const double e = mm_at_sigma(cap.sigma_c - cap.v, cap.c_mm, slot);
+  if (slot >= buf_.capacity() || arc_g_[slot] > 0) return late;
+  return std::min(cap.c_mm - cap.v, e);
+}
+
+double AccelLimitedAccDec::mm_at_sigma(double target, double hint_mm, std::size_t& slot) const {
+  // The lowest path position p (from the start of the tool's segment, or of the window's first)
+  // with σ(p) ≥ target, for a target ≤ σ(hint_mm): back from hint_mm's item by galloping over
+  // the items' σ at their starts, then bisection, then inside the segment's pieces. O(log n).
+  // slot = capacity (none) where the items searched are not all motion items.
+  slot = buf_.capacity();
+  if (buf_.empty() || !have_prev_) return hint_mm;
+  const std::uint64_t first = std::max(cur_, buf_.begin_index()), end = buf_.end_index();
+  if (first >= end) return hint_mm;
+  auto sigma0 = [&](std::uint64_t k) { return sigma0_[buf_.slot(k)]; };
+  std::uint64_t hi = buf_.seek(first, hint_mm, UINT64_MAX, end - 1);
+  if (!buf_.is_motion(hi)) return hint_mm;
+  std::uint64_t lo = hi;
+  if (sigma0(hi) > target) {
+    // Invariant: σ0(hi) > target; then σ0(lo) ≤ target.
+    for (std::uint64_t step = 1;; step *= 2) {
+      const std::uint64_t probe = hi - std::min(step, hi - first);
+      if (probe == hi || !buf_.is_motion(probe)) {
+        // σ reaches the target before the first item searched: at its start (not the tool's
+        // position: with the tool's item retired, the tool may still be before it).
+        if (probe == hi) slot = buf_.slot(hi);
+        return s0_mm_[buf_.slot(hi)];
+      }
+      if (sigma0(probe) <= target) {
+        lo = probe;
+        break;
+      }
+      hi = probe;
+    }
+    while (hi - lo > 1) {
+      const std::uint64_t mid = lo + (hi - lo) / 2;
+      if (!buf_.is_motion(mid)) return hint_mm;
+      (sigma0(mid) <= target ? lo : hi) = mid;
+    }
+  }
+  slot = buf_.slot(lo);
+  const SigmaPieces& pc = pieces_[slot];
+  const double t = target - sigma0_[slot];
+  double x = 0;
+  if (t > 0) {
+    if (t <= pc.sig1 && pc.p1 > 0) {
+      x = t / pc.rate0;
+    } else if (t <= pc.sig2 && pc.p2 > pc.p1) {
+      x = pc.p1 + (t - pc.sig1) / pc.rate1;
+    } else {
+      x = pc.p2 + (t - pc.sig2) / pc.rate2;
+    }
+    x = std::min(x, pc.len);
+    // Rounding: σ(p) ≥ target exactly as seg_sigma() computes it.
+    for (int it = 0; it < 4 && x < pc.len && seg_sigma(slot, x) < t; ++it) {
+      x = std::nextafter(x, kInf);
+    }
+  }
+  return s0_mm_[slot] + x;
 }
 
 void AccelLimitedAccDec::clear_keys(std::size_t g) {
@@ -1860,7 +1930,7 @@ double AccelLimitedAccDec::reference_bound(double or_ratio) const {
     if (state_[i] == State::kEmpty) continue;  // by id: every live cap once
     const Cap& c = caps_[i];
     if (pos_mm_ >= c.e_mm) continue;
-    if (pos_mm_ >= entry_mm(c)) {
+    if (pos_mm_ >= c.entry) {
       out = std::min(out, c.feed ? or_ratio * c.v : c.v);
     } else if (c.lattice) {
       const double h = c.v - 0.5 * a0_;

@@ -82,6 +82,7 @@ class AccelLimitedAccDec final : public AccDec {
     double sigma_c = 0;  // σ(c) (see the derivation)
     bool feed = false;
     bool lattice = false;  // braking key in the exact discrete (lattice) form, see 3.
+    double entry = 0;      // where it takes over from its key (entry_mm(), set by insert())
   };
   enum class State : std::uint8_t { kEmpty, kApproaching, kActive };
 
@@ -94,9 +95,12 @@ class AccelLimitedAccDec final : public AccDec {
   void insert_joint_cap(std::size_t slot_a, std::size_t slot_b, double joint_mm, double len_a,
                         double vg);
   void activate(std::size_t g);
-  void set_keys(std::size_t g);
+  void set_keys(std::size_t g, double entry);
   void clear_keys(std::size_t g);
-  static double entry_mm(const Cap& cap);
+  double entry_mm(const Cap& cap) const;
+  // The lowest path position from the tool's segment on where σ reaches `target`, for a
+  // target ≤ σ(hint_mm); `slot`: the buffer slot of the segment it lies in (capacity: none).
+  double mm_at_sigma(double target, double hint_mm, std::size_t& slot) const;
   void clear(std::size_t pos);
   // Moves the cap at position `from` to the empty position `to` (same kind).
   void move(std::size_t from, std::size_t to);

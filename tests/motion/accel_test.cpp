@@ -915,6 +915,29 @@ TEST(AccelLimited, GentleJointBeforeASharpCornerIsZonedForTheSpeedItsBrakingLeav
   EXPECT_EQ(full_braking_cycles(r, m, k - 12, k), 12);
 }
 
+// A corner cap below A0 at the end of a line of low r (X at 600 mm/s², r = 0.3; the corner's
+// per-axis cap 0.6 mm/s): the cap's key bound (3.) is √(A0² + V²) − A0 = 0.09 V at c, and
+// followed up to c the tool crawled towards the corner below its cap. The cap takes over where
+// its key's bound has come down to V (σ(c) − σ(e) = V), so the last cycles before the corner run
+// at the cap.
+TEST(AccelLimited, SmallCornerCapIsRunAtNotCrawledTowards) {
+  MachineConfig m = test_machine();
+  m.axes[kX].max_accel_mm_s2 = 600;
+  m.axes[kY].max_accel_mm_s2 = 2000;
+  const RunResult r = run_checked(m, xy_polyline({{2.0, 0.0}, {2.0, 90.0}}, 10000));
+  const double vg_mm_s = 600 * m.period_s;  // a_x·τ / |S_x − E_x|
+  std::size_t k = 1;
+  while (k < r.samples.size() && r.samples[k].position[kY] <= 0) ++k;  // the crossing
+  ASSERT_GT(k, 40u);
+  int slow = 0;
+  for (std::size_t i = k - 30; i < k; ++i) {
+    const double v =
+        norm(r.samples[i].position.xyz() - r.samples[i - 1].position.xyz()) / m.period_s;
+    if (v < 0.9 * vg_mm_s) ++slow;
+  }
+  EXPECT_EQ(slow, 0);  // (3 before: 0.47, 0.35, 0.26 mm/s)
+}
+
 // An override drop while the tool brakes through a gentle corner's zone for a slower feed after
 // it (seed 23 of RandomProgramsWithCoupledAxesAndLines once σ ran a zone's decreases at their own
 // r, 7.): the feed recovery decelerated at the zone's r for increases and fell behind the feed
