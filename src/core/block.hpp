@@ -32,6 +32,9 @@ struct Block {
   // A line merged from collinear pieces (planner/line_merge.hpp): the source line of its last
   // piece (`line` is its first's). 0: the block is one source block.
   std::uint32_t last_line = 0;
+  // A merged line: the unit directions of its first and last pieces (zero: not merged). The
+  // corners at its ends are the pieces' corners; the planner passes them no faster than those.
+  Vec3 first_piece_dir, last_piece_dir;
 
   // Motion (kRapid, kLine, kArc). start equals the previous motion block's end.
   AxisVec start;

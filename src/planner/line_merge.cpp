@@ -95,6 +95,7 @@ void LineMerger::put(const Block& block) {
       line_.correction = block.correction;
     }
     last_dir_ = unit_direction(block);
+    line_.last_piece_dir = last_dir_;
     line_.end = block.end;
     line_.path_mode = block.path_mode;
     line_.last_line = block.last_line != 0 ? block.last_line : block.line;
@@ -104,6 +105,7 @@ void LineMerger::put(const Block& block) {
   if (mergeable_kind(block)) {
     line_ = block;
     last_dir_ = unit_direction(block);
+    line_.first_piece_dir = last_dir_;  // (kept only if a piece joins, finish())
     cone_ = Cone{};
     pieces_ = 1;
     feed_hi_mm_min_ = block.feed_mm_min;
@@ -115,6 +117,7 @@ void LineMerger::put(const Block& block) {
 
 void LineMerger::finish() {
   if (!pending_) return;
+  if (pieces_ == 1) line_.first_piece_dir = line_.last_piece_dir = Vec3{};  // as programmed
   emit(line_);
   pending_ = false;
 }

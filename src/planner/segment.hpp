@@ -56,6 +56,10 @@ struct Segment {
   double r0 = 0, r1 = 0, sweep_rad = 0, rise_mm = 0;
   double rho_mm = 0;  // radius of curvature (r² + p²)/r, p = rise/Φ
 
+  // A merged line (planner/line_merge.hpp): the directions of its first and last pieces (zero:
+  // not merged), whose corners with the segments before and after joint_speed_pc() keeps.
+  Vec3 first_piece_dir, last_piece_dir;
+
   double feed_pc = 0;  // F at 100 % override (rapids: the rapid rate)
   double vb_pc = 0;    // shape passing speed Vb
   double tol_mm = 0;   // contour tolerance for the post filter at its end
