@@ -354,8 +354,12 @@
 //    reached the zone, the zone is sized again for V' (shorter, with more room for the speed
 //    change: r only rises, σ and the keys after it are recomputed) and the joint's cap lowered
 //    to V', so that the zone's premise holds by the cap whatever comes later. Only plain zones
-//    (two lines, no chain, no filter, set by that joint alone). line-contouring-xz 22.023 →
-//    21.955 s: a 2° joint 0.25 mm before a 68° corner had its zone sized for 46 µm/cycle.
+//    (two lines, no turn-window chain, no filter). line-contouring-xz 22.023 → 21.955 s: a 2°
+//    joint 0.25 mm before a 68° corner had its zone sized for 46 µm/cycle. A zone whose tail
+//    reached back over up to kRezoneWalk segments keeps their tails as they were before it
+//    (LastZone::walk), restored and zoned again for V'; a chain's zone (a shorter than the step,
+//    7.) only where V' ≤ a's length, where no step skips a and each corner's own zone holds
+//    (line-contouring-xz 21.932 → 21.922 s).
 //
 // Without a filter the tool position is the commanded position and at rest means step 0.
 #include "motion/accel_limited.hpp"
@@ -1423,11 +1427,15 @@ bool AccelLimitedAccDec::rezone_before(const LastZone& z, std::uint64_t index_b,
   // at s, σ(j_b) − σ(s) ≤ j_b − s), plus 2·A0 for 11.'s steps above it. Where that V' is well
   // below V and the tool has not reached the zone yet, the zone is sized again for V' (shorter,
   // with more room for the speed change) and j_a's cap lowered to V' (the zone's premise then
-  // holds by the cap, as in the forward case). Only a plain zone: two lines, no chain, no filter,
-  // the tail inside a and set by this joint alone, b's head by it alone.
-  if (!z.valid || z.index_a + 1 != index_b || late_hold_) return false;
+  // holds by the cap, as in the forward case). Only a plain zone (two lines, no turn-window
+  // chain, no filter, b's head set by this joint alone) or a chain's where V' ≤ a's length.
+  if (!z.valid || z.index_a + 1 != index_b || late_hold_ || z.n_walk == 0) return false;
   const std::uint64_t ia = z.index_a;
-  if (ia < buf_.begin_index() || ia < cur_) return false;
+  const std::uint64_t first = z.walk[z.n_walk - 1].index;
+  if (first < buf_.begin_index() || first < cur_) return false;
+  // (The old zone, [j − 2V − its chain's middle, j], ahead of the tool too: σ under the tool is
+  // in use.)
+  if (!(z.j_mm - 2 * z.v - z.chain_mm > pos_mm_ + 2 * (step_ + a0_))) return false;
   const Segment& a = buf_[ia];
   const Segment& b = buf_[index_b];
   if (a.kind != ItemKind::kMotion || b.kind != ItemKind::kMotion) return false;
@@ -1439,6 +1447,9 @@ bool AccelLimitedAccDec::rezone_before(const LastZone& z, std::uint64_t index_b,
     v = reach;
   }
   if (!(v < 0.95 * z.v)) return false;
+  // A chain's zone (7.): at V' within its middle, a (no step skips it), each corner's own zone
+  // holds, and this one is plain.
+  if (z.chain_mm > 0 && !(v <= a.length_mm)) return false;
   // Every pair that may span j_a is still to come, each under j_b's cap.
   if (!(z.j_mm - 2 * v > pos_mm_ + 2 * (step_ + a0_))) return false;
   const double d = plain_zone_d(z.e, z.s, z.r_hi, v, false);
@@ -1454,17 +1465,31 @@ bool AccelLimitedAccDec::rezone_before(const LastZone& z, std::uint64_t index_b,
     if (!(z.v * turn >= 0.25 * a0_ && a.length_mm >= 2 * v && b.length_mm >= v)) return false;
   }
   const bool zoned = rj < z.r_top;
-  tail_mm_[sa] = zoned ? 2 * v : 0.0;
-  tail_r_[sa] = zoned ? rj : 1.0;
-  tail_rd_[sa] = zoned ? rjd : 1.0;
+  // The tails as they were before the zone (each walked segment), then the new zone's
+  // [j − 2V', j] over them (shorter: a part of the same segments).
+  const double zone_start = z.j_mm - 2 * v;
+  for (std::size_t w = 0; w < z.n_walk; ++w) {
+    const WalkedTail& t = z.walk[w];
+    const std::size_t sx = buf_.slot(t.index);
+    tail_mm_[sx] = t.mm;
+    tail_r_[sx] = t.r;
+    tail_rd_[sx] = t.rd;
+    const Segment& x = buf_[t.index];
+    if (zoned && x.end_mm() > zone_start) {
+      const double covered = x.end_mm() - std::max(zone_start, x.s0_mm);
+      tail_r_[sx] = t.mm > 0 ? std::min(t.r, rj) : rj;
+      tail_rd_[sx] = t.mm > 0 ? std::min(t.rd, rjd) : rjd;
+      tail_mm_[sx] = std::max(t.mm, covered);
+    }
+    refresh_pieces(sx);
+    update_r(t.index);
+  }
   head_mm_[sb] = zoned ? std::min(b.length_mm, v) : 0.0;
   head_r_[sb] = zoned ? rj : 1.0;
   head_rd_[sb] = zoned ? rjd : 1.0;
-  refresh_pieces(sa);
   refresh_pieces(sb);
-  update_r(ia);
   update_r(index_b);
-  resigma(ia, index_b);
+  resigma(z.walk[z.n_walk - 1].index, index_b);
   if (v < (g != kNone ? caps_[g].v : kInf)) {
     insert_joint_cap(sa, sb, z.j_mm, a.length_mm, v);
     if (prev_.valid && prev_.index_a == ia) prev_.vg = std::min(prev_.vg, v);
@@ -1775,6 +1800,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   const double zone_start = std::max(zone_from, late_hold_ ? hold_mm_ : pos_mm_);
   std::uint64_t first = index_a + 1;
   std::size_t walked = 0;
+  std::array<WalkedTail, kRezoneWalk> walk{};
   for (std::uint64_t k = index_a + 1;
        k-- > std::max(cur_, buf_.begin_index()) && walked < kZoneWalk;) {
     const Segment& x = buf_[k];
@@ -1785,6 +1811,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     if (x.end_mm() <= zone_start) break;
     const std::size_t sx = buf_.slot(k);
     const double covered = x.end_mm() - std::max(zone_start, x.s0_mm);
+    if (walked < kRezoneWalk) walk[walked] = {k, tail_mm_[sx], tail_r_[sx], tail_rd_[sx]};
     if (tail_mm_[sx] > 0) {
       tail_r_[sx] = std::min(tail_r_[sx], rj);
       tail_rd_[sx] = std::min(tail_rd_[sx], rjd);
@@ -1800,9 +1827,10 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   }
   const double head = (1 + lag_) * v;
   add_head(slot_b, std::min(b.length_mm, head), rj, rjd);
-  if (lag_ == 0 && !a.arc && !b.arc && !chained && chain_mm == 0 && walked == 1 &&
-      first == index_a && zone_from >= a.s0_mm) {
-    last_zone_ = {true, index_a, a.end_mm(), v, r_hi, r_top, floor, e, s};
+  // (A plain zone, or a chain's: the walk covered it whole, over motion items only.)
+  if (lag_ == 0 && !a.arc && !b.arc && !chained && walked >= 1 && walked <= kRezoneWalk &&
+      first + walked == index_a + 1 && zone_start == zone_from && zone_from >= buf_[first].s0_mm) {
+    last_zone_ = {true, index_a, a.end_mm(), v, r_hi, r_top, floor, e, s, walk, walked, chain_mm};
   }
   if (lag_ > 0 && head > b.length_mm) carry(a.end_mm() + head, rj);
   if (first > index_a) return;

@@ -279,11 +279,21 @@ class AccelLimitedAccDec final : public AccDec {
   } prev_;
   // The zone of the last joint (7.), where 13. may size it again for the speed the next joint's
   // cap leaves there: only a plain one (two lines, no chain, no filter, inside a and b).
+  // Its tail may reach back over a few segments before a (walk[0] = a, then back): their tail
+  // zones as they were before it, restored when it is sized again.
+  static constexpr std::size_t kRezoneWalk = 4;
+  struct WalkedTail {
+    std::uint64_t index = 0;
+    double mm = 0, r = 1, rd = 1;
+  };
   struct LastZone {
     bool valid = false;
     std::uint64_t index_a = 0;
     double j_mm = 0, v = 0, r_hi = 1, r_top = 1, floor = 0;
     AxisVec e, s;
+    std::array<WalkedTail, kRezoneWalk> walk{};
+    std::size_t n_walk = 0;
+    double chain_mm = 0;  // a chain's middle (7.; 0: none): the zone reached back over it too
   } last_zone_;
   // 13.: the zone of the joint before `index_a` sized again for the cap vc of the joint at its
   // end (true: changed).

@@ -938,6 +938,21 @@ TEST(AccelLimited, SmallCornerCapIsRunAtNotCrawledTowards) {
   EXPECT_EQ(slow, 0);  // (3 before: 0.47, 0.35, 0.26 mm/s)
 }
 
+// 13. where the gentle joint's zone reaches back over a short segment before it (its tail over
+// two segments: a 0.05 mm piece of the line before it): sized again for the 40° corner's
+// braking bound, it lets the braking before the gentle joint run at the full Amax (2 of 12
+// cycles at the full rate before, 0.422 → 0.410 s).
+TEST(AccelLimited, GentleZoneOverTwoSegmentsIsSizedAgainForTheSharpCornerAfter) {
+  const MachineConfig m = centred_machine();
+  const RunResult r =
+      run_checked(m, xy_polyline({{20.0, 45.0}, {0.05, 45.0}, {0.08, 46.5}, {20.0, 86.5}}, 10000));
+  const double gentle_x = 20.05 * std::cos(kPi / 4);
+  std::size_t k = 1;
+  while (k < r.samples.size() && r.samples[k].position[kX] < gentle_x) ++k;  // its crossing
+  ASSERT_GT(k, 20u);
+  EXPECT_EQ(full_braking_cycles(r, m, k - 12, k), 12);
+}
+
 // An override drop while the tool brakes through a gentle corner's zone for a slower feed after
 // it (seed 23 of RandomProgramsWithCoupledAxesAndLines once σ ran a zone's decreases at their own
 // r, 7.): the feed recovery decelerated at the zone's r for increases and fell behind the feed
