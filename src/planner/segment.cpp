@@ -85,8 +85,10 @@ Segment make_motion_segment(const Block& b, const Limits& lim) {
   s.start = b.start;
   s.end = b.end;
   s.rapid = b.kind == BlockKind::kRapid;
-  s.first_piece_dir = b.first_piece_dir;
-  s.last_piece_dir = b.last_piece_dir;
+  if (b.kind != BlockKind::kArc) {
+    s.e1 = b.first_piece_dir;
+    s.e2 = b.last_piece_dir;
+  }
   s.mode = b.path_mode;
   s.tol_mm = b.path_mode == PathMode::kBlend
                  ? (b.tolerance_mm >= 0 ? b.tolerance_mm : lim.contour_tolerance_mm)
@@ -238,11 +240,12 @@ double joint_speed_pc(const Segment& a, const Segment& b, const Limits& lim, boo
   // A merged line's direction differs from its end pieces' by up to its tolerance over its
   // length, and the corner it makes can turn less than the programmed one: the corner of the
   // pieces too (found: a 3.48° corner of line-contouring-xz crossed at 33.12 mm/s, its Vg 32.94).
-  const bool piece_a = a.last_piece_dir != Vec3{}, piece_b = b.first_piece_dir != Vec3{};
+  const Vec3 a_last = a.last_piece_dir(), b_first = b.first_piece_dir();
+  const bool piece_a = a_last != Vec3{}, piece_b = b_first != Vec3{};
   if (piece_a || piece_b) {
     AxisVec pe = e, ps = s;
-    if (piece_a) pe.set_xyz(a.last_piece_dir);
-    if (piece_b) ps.set_xyz(b.first_piece_dir);
+    if (piece_a) pe.set_xyz(a_last);
+    if (piece_b) ps.set_xyz(b_first);
     v = std::min(v, turn_speed_pc(pe, ps, lim, kappa));
   }
   const double turn = norm(s.xyz() - e.xyz());
