@@ -869,6 +869,14 @@ Prog xy_polyline(std::initializer_list<std::pair<double, double>> len_deg, doubl
   return p;
 }
 
+// The first sample (after the start) whose X reaches x_mm: the end of the cycle that crosses a
+// joint there.
+std::size_t crossing_sample(const RunResult& r, double x_mm) {
+  std::size_t k = 1;
+  while (k < r.samples.size() && r.samples[k].position[kX] < x_mm) ++k;
+  return k;
+}
+
 // How many of the cycles [from, to) slowed down by at least 0.95·Amax·τ², measured from the
 // samples' chords.
 int full_braking_cycles(const RunResult& r, const MachineConfig& m, std::size_t from,
@@ -892,8 +900,7 @@ int full_braking_cycles(const RunResult& r, const MachineConfig& m, std::size_t 
 TEST(AccelLimited, GentleJointAfterACornerIsZonedForTheSpeedItCanReach) {
   const MachineConfig m = centred_machine();
   const RunResult r = run_checked(m, xy_polyline({{20.0, 0.0}, {0.2, 30.0}, {20.0, 30.5}}, 10000));
-  std::size_t k = 1;
-  while (k < r.samples.size() && r.samples[k].position[kX] < 20.0) ++k;  // the crossing
+  const std::size_t k = crossing_sample(r, 20.0);
   ASSERT_GT(k, 20u);
   // The braking cycles before the crossing's last few (where the corner's own zone and cap act).
   EXPECT_EQ(full_braking_cycles(r, m, k - 16, k - 4), 12);
@@ -908,9 +915,7 @@ TEST(AccelLimited, GentleJointBeforeASharpCornerIsZonedForTheSpeedItsBrakingLeav
   const MachineConfig m = centred_machine();
   const RunResult r =
       run_checked(m, xy_polyline({{20.0, 45.0}, {0.08, 46.5}, {20.0, 86.5}}, 10000));
-  const double gentle_x = 20 * std::cos(kPi / 4);
-  std::size_t k = 1;
-  while (k < r.samples.size() && r.samples[k].position[kX] < gentle_x) ++k;  // its crossing
+  const std::size_t k = crossing_sample(r, 20 * std::cos(kPi / 4));  // the gentle joint's
   ASSERT_GT(k, 20u);
   EXPECT_EQ(full_braking_cycles(r, m, k - 12, k), 12);
 }
@@ -946,9 +951,7 @@ TEST(AccelLimited, GentleZoneOverTwoSegmentsIsSizedAgainForTheSharpCornerAfter) 
   const MachineConfig m = centred_machine();
   const RunResult r =
       run_checked(m, xy_polyline({{20.0, 45.0}, {0.05, 45.0}, {0.08, 46.5}, {20.0, 86.5}}, 10000));
-  const double gentle_x = 20.05 * std::cos(kPi / 4);
-  std::size_t k = 1;
-  while (k < r.samples.size() && r.samples[k].position[kX] < gentle_x) ++k;  // its crossing
+  const std::size_t k = crossing_sample(r, 20.05 * std::cos(kPi / 4));  // the gentle joint's
   ASSERT_GT(k, 20u);
   EXPECT_EQ(full_braking_cycles(r, m, k - 12, k), 12);
 }
