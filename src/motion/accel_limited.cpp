@@ -360,6 +360,12 @@
 //    (LastZone::walk), restored and zoned again for V'; a chain's zone (a shorter than the step,
 //    7.) only where V' ≤ a's length, where no step skips a and each corner's own zone holds
 //    (line-contouring-xz 21.932 → 21.922 s).
+//    That bound carries the lattice's and 11.'s slack (+A0, +2·A0), large where A0 is large
+//    against the speeds. Where braking at A0 over b leaves less, V_r = √(vc² + 2·A0·L_b) − A0/2,
+//    and a zone sized for it has ≥ 20 % more room for the speed change, the zone is sized for
+//    V_r and the joint capped there instead, if the tool can still follow that cap (a choice:
+//    a lower cap may cost a cycle's rounding; line-contouring-xz 21.922 → 21.864 s,
+//    circle_small_segments 12.517 → 12.435).
 //
 // Without a filter the tool position is the commanded position and at rest means step 0.
 #include "motion/accel_limited.hpp"
@@ -383,8 +389,9 @@ constexpr double kRecoverShare = 0.98;  // √(a_t² + a_n²) ≤ 0.98·g slowin
 constexpr double kZoneFloor = 0.25;
 constexpr std::size_t kReleasePerCycle = 32;  // pending caps a cycle inserts (6.)
 constexpr std::size_t kZoneWalk = 16;         // segments a joint zone may reach back over
-constexpr double kMinAlphaMm = 1e-5;          // 11.: the sample before a centred crossing, before j
-constexpr int kCentreSearch = 6;              // 11.: bisection steps of a centred step search
+constexpr double kRezoneGain = 1.2;   // 13.: a zone sized below its braking bound gains this much D
+constexpr double kMinAlphaMm = 1e-5;  // 11.: the sample before a centred crossing, before j
+constexpr int kCentreSearch = 6;      // 11.: bisection steps of a centred step search
 
 // The largest step x from which the tool can still stop exactly at distance d with steps that
 // shrink by at most a per cycle: x + (x − a) + (x − 2a) + … (positive terms, the last one ≤ a
@@ -1445,6 +1452,26 @@ bool AccelLimitedAccDec::rezone_before(const LastZone& z, std::uint64_t index_b,
         std::sqrt(vc * vc + a0_ * a0_ + 2 * a0_ * (b.end_mm() - (z.j_mm - 2 * v))) + 2 * a0_;
     if (reach >= v) break;
     v = reach;
+  }
+  // The speed the tool can reach at j_a braking at A0 for vc over b, √(vc² + 2·A0·L_b), is far
+  // below that bound where A0 is large against the speeds (a 13.6° joint 10.4 µm before a 55°
+  // corner of line-contouring-xz: 6.8 against 14.8 µm/cycle). Sized and capped a little below
+  // it, V_r = that − A0/2, the zone's speed change is the larger one of the lower V; the cap
+  // costs a cycle's rounding where the tool would have passed faster, so only where it raises
+  // the zone's D by 20 % or more (a choice, not a bound: each V with its cap is sound; the
+  // measured trade is in bench/README.md, "Session 15"). Only where the tool can follow the new
+  // cap (its key's bound at the tool, with σ as now — the new zone only raises r — is at least
+  // the last step, 3. (ii)), and no committed step of 11. or step on 10.'s curve relies on what
+  // is ahead.
+  if (const double v_r = std::max(vc, std::sqrt(vc * vc + 2 * a0_ * b.length_mm) - 0.5 * a0_);
+      v_r < v && !commit_.valid && relied_e_mm_ == kInf &&
+      plain_zone_d(z.e, z.s, z.r_hi, v_r, false) >=
+          kRezoneGain * std::max(z.floor, plain_zone_d(z.e, z.s, z.r_hi, v, false))) {
+    const double ds = sigma_at(z.j_mm - v_r) - sigma_at(pos_mm_);
+    const double h = v_r - 0.5 * a0_;
+    const double bound = std::min(std::sqrt(a0_ * a0_ + v_r * v_r + 2 * a0_ * ds) - a0_,
+                                  std::sqrt(h * h + 2 * a0_ * ds) - 0.5 * a0_);
+    if (ds > 0 && bound >= step_) v = v_r;
   }
   if (!(v < 0.95 * z.v)) return false;
   // A chain's zone (7.): at V' within its middle, a (no step skips it), each corner's own zone

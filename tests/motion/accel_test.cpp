@@ -956,6 +956,23 @@ TEST(AccelLimited, GentleZoneOverTwoSegmentsIsSizedAgainForTheSharpCornerAfter) 
   EXPECT_EQ(full_braking_cycles(r, m, k - 12, k), 12);
 }
 
+// 13. below the braking bound: a 13.6° joint 10.4 µm before a 55° corner (line-contouring-xz,
+// line 509, turned into the XY plane). The 55° corner's braking bound at the gentle joint, with
+// the lattice's and 11.'s slack, is above the joint's own cap, so the zone stayed sized for the
+// cap at the floor's share (5.2 → 4.2 → 3.7 → 3.2 → 2.7 µm/cycle). Sized for what braking at
+// A0 leaves there, less A0/2, the last cycles before the joint brake at the full Amax.
+TEST(AccelLimited, GentleJointJustBeforeASharpCornerIsZonedForWhatBrakingLeaves) {
+  const MachineConfig m = centred_machine();
+  const RunResult r =
+      run_checked(m, xy_polyline({{1.0, 59.3}, {0.0104, 73.2}, {1.0, 18.6}}, 10000));
+  const std::size_t k = crossing_sample(r, 1.0 * std::cos(59.3 * kPi / 180));
+  ASSERT_GT(k, 20u);
+  // The six cycles before the crossing: 5 at the full rate (one holds at the gentle joint's cap),
+  // where the zone at the floor braked 5.2 → 4.2 → 3.7 → 3.2 → 2.7 → 2.3 (0 of 6).
+  EXPECT_GE(full_braking_cycles(r, m, k - 6, k), 5);
+  EXPECT_LE(r.time_s(), 0.094);  // 0.097 s before
+}
+
 // An override drop while the tool brakes through a gentle corner's zone for a slower feed after
 // it (seed 23 of RandomProgramsWithCoupledAxesAndLines once σ ran a zone's decreases at their own
 // r, 7.): the feed recovery decelerated at the zone's r for increases and fell behind the feed
