@@ -219,6 +219,9 @@ class AccelLimitedAccDec final : public AccDec {
   // Passing speed the joint zones of the joint after item zone_index_a_ were computed for (a
   // joint cap when lower than the segments' caps; see 7.).
   double zone_vg_ = 0;
+  // The running square of what the caps before can leave at the last joint (joint_zones()).
+  double reach_sq_ = std::numeric_limits<double>::infinity();
+  std::uint64_t reach_b_ = ~std::uint64_t{0};  // the segment after that joint
   double zone_joint_pc_ = 0;  // planner::joint_speed_pc of that joint (on_joint reuses it)
   // The directions at that joint (a's end, b's start) and at a's start (on_joint reuses them).
   AxisVec zone_e_, zone_s_, zone_a_start_;
