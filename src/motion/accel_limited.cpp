@@ -1465,15 +1465,20 @@ bool AccelLimitedAccDec::rezone_before(const LastZone& z, std::uint64_t index_b,
   // cap (its key's bound at the tool, with σ as now — the new zone only raises r — is at least
   // the last step, 3. (ii)), and no committed step of 11. or step on 10.'s curve relies on what
   // is ahead.
+  double d = -1;  // plain_zone_d() at v, once computed
   if (const double v_r = std::max(vc, std::sqrt(vc * vc + 2 * a0_ * b.length_mm) - 0.5 * a0_);
-      v_r < v && !commit_.valid && relied_e_mm_ == kInf &&
-      plain_zone_d(z.e, z.s, z.r_hi, v_r, false) >=
-          kRezoneGain * std::max(z.floor, plain_zone_d(z.e, z.s, z.r_hi, v, false))) {
-    const double ds = sigma_at(z.j_mm - v_r) - sigma_at(pos_mm_);
-    const double h = v_r - 0.5 * a0_;
-    const double bound = std::min(std::sqrt(a0_ * a0_ + v_r * v_r + 2 * a0_ * ds) - a0_,
-                                  std::sqrt(h * h + 2 * a0_ * ds) - 0.5 * a0_);
-    if (ds > 0 && bound >= step_) v = v_r;
+      v_r < v && !commit_.valid && relied_e_mm_ == kInf) {
+    const double d_r = plain_zone_d(z.e, z.s, z.r_hi, v_r, false);
+    if (d_r >= kRezoneGain * std::max(z.floor, plain_zone_d(z.e, z.s, z.r_hi, v, false))) {
+      // The cap's key (3., either form insert_joint_cap() may choose) at the tool.
+      const double sc = sigma_at(z.j_mm - v_r), sp = sigma_at(pos_mm_);
+      const double h = v_r - 0.5 * a0_;
+      if (sc > sp && brake(v_r * v_r + 2 * a0_ * sc, sp) >= step_ &&
+          lattice(h * h + 2 * a0_ * sc, sp) >= step_) {
+        v = v_r;
+        d = d_r;
+      }
+    }
   }
   if (!(v < 0.95 * z.v)) return false;
   // A chain's zone (7.): at V' within its middle, a (no step skips it), each corner's own zone
@@ -1481,7 +1486,7 @@ bool AccelLimitedAccDec::rezone_before(const LastZone& z, std::uint64_t index_b,
   if (z.chain_mm > 0 && !(v <= a.length_mm)) return false;
   // Every pair that may span j_a is still to come, each under j_b's cap.
   if (!(z.j_mm - 2 * v > pos_mm_ + 2 * (step_ + a0_))) return false;
-  const double d = plain_zone_d(z.e, z.s, z.r_hi, v, false);
+  if (d < 0) d = plain_zone_d(z.e, z.s, z.r_hi, v, false);
   if (!(d >= z.floor)) return false;
   const double rj = std::max(d / a0_, 1e-6);
   const double rjd = std::max(rj, std::max(d, plain_zone_d(z.e, z.s, z.r_hi, v, true)) / a0_);
