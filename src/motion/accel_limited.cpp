@@ -135,7 +135,8 @@
 //    a 1 µm segment gave 2 011.7 mm/s²), and the stop's landing bounds in real distance (3.)
 //    at the block's end, with its r and its joint zone's (check_stop()); insert() tests what
 //    these did not foresee (on_joint()'s cap for two corners in one cycle). Only when the tool
-//    is near enough for anything to bind: every cap starts at or after s0 − (2 + lag)·v_hi, and
+//    is near enough for anything to bind: every cap starts at or after s0 − (2 + reach_lag)·v_hi
+//    (8.), and
 //    from c − p ≥ (u²/(2·A0) + u + A0)/r_lo on no key bound is below the step u (r_lo the
 //    window's, the block's, and kZoneFloor × the lower r at its joint, the lowest its zone
 //    may have). If one binds, the block is *held*: the window's end it
@@ -234,17 +235,25 @@
 //    filter runs on the path position. The post-interpolation filter (Tp cycles, kernel) averages
 //    the axis positions after it; its corner rounding v·(Tp + 1)·sin θ/8 ≤ tolerance holds when
 //    the speed is ≤ the corner's Vg (planner::joint_speed_pc) for the Tp cycles around the corner.
-//    Both average the commanded motion over at most lag = T2 + Tp cycles, so:
-//      - every cap reaches lag·V further on both sides ([c − lag·V, e + lag·V), a corner
-//        [j − (1 + lag)·Vg, j + (1 + lag)·Vg)): if every commanded step in that range is ≤ V, an
-//        output step in [c, e) averages only such steps (the commanded position is at most
-//        lag·V ahead of the output, and the output reaches c only after the mean of its window
-//        does);
-//      - a joint zone (7.) spans [j − (2 + lag)·V, j + (1 + lag)·V] (past b into the segments
-//        after it through a carried head zone);
-//      - the output at p averages the commanded accelerations over [p, p + lag·v], so a segment
-//        with r < 1 carries its r over the next lag·v_top mm (a head zone of the later segments;
-//        v_top the highest step allowed so far).
+//    Both average the commanded motion over at most lag = T2 + Tp cycles (the steps a late
+//    block must respect, 6.). How far that reaches along the path: the jerk stage's output
+//    position is the mean of the last T2 commanded positions x_0 < … < x_{T2−1}, its step the
+//    mean of the commanded steps that start there. Let every commanded step that starts in
+//    [c − W, e + W) or lands at or after c − W be ≤ V, W = (T2 − 1)/2·V. An output step that
+//    starts in [c, e) (mean ≥ c) has x_0 ≥ c − W: else the positions from the first one at or
+//    after c − W on rise by ≤ V a cycle from below c − W + V, and the mean stays below
+//    c − W + (T2 − 1)/2·V = c. Likewise x_{T2−1} < e + W. So it averages only steps ≤ V. Its
+//    acceleration averages the step changes over one commanded step more: (T2 + 1)/2·V. The
+//    post filter averages axis positions off the path; it keeps its whole Tp·V. So, with
+//    reach_lag = (T2 + 1)/2 + Tp (T2 + Tp until session 16: zigzag_0.002 at T2 = 4 ran 34.54 s,
+//    now 29.54):
+//      - every cap reaches reach_lag·V further on both sides, a corner
+//        [j − (1 + reach_lag)·Vg, j + (1 + reach_lag)·Vg);
+//      - a joint zone (7.) spans [j − (2 + reach_lag)·V, j + (1 + reach_lag)·V] (past b into the
+//        segments after it through a carried head zone);
+//      - the output at p averages the commanded accelerations up to reach_lag·v ahead of p, so
+//        a segment with r < 1 carries its r over the next reach_lag·v_top mm (a head zone of the
+//        later segments; v_top the highest step allowed so far).
 //    A block arriving late (6.), whose widened caps would start behind the commanded position
 //    over steps already in the filter, is held until the tool has stopped at its start and the
 //    filter has emptied: no cap then starts behind a step the filter still averages
@@ -559,7 +568,9 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       jerk_(limits.t2_cycles > 1 ? limits.t2_cycles : 1),
       jerk_on_(limits.t2_cycles > 1),
       lag_((limits.t2_cycles > 1 ? limits.t2_cycles : 0.0) +
-           (limits.post_filter() ? limits.post_cycles : 0.0)) {
+           (limits.post_filter() ? limits.post_cycles : 0.0)),
+      reach_lag_((limits.t2_cycles > 1 ? 0.5 * (limits.t2_cycles + 1.0) : 0.0) +
+                 (limits.post_filter() ? limits.post_cycles : 0.0)) {
   // Free ids, lowest on top.
   for (std::size_t k = 0; k < 3; ++k) {
     for (std::size_t i = 0; i < pool_; ++i) {
@@ -638,9 +649,9 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   }
   if (lag_ > 0) {
     vtop_pc_ = std::max(vtop_pc_, std::min(vcap, s.feed_pc * or_max_));
-    // The output at p averages the commanded accelerations over [p, p + lag·v]: a commanded
-    // step may use only the lowest r of the lag·v behind it.
-    if (r < 1) carry(s.end_mm() + lag_ * vtop_pc_, r);
+    // The output at p averages the commanded accelerations up to reach_lag·v ahead of it (8.):
+    // a commanded step may use only the lowest r of the reach_lag·v behind it.
+    if (r < 1) carry(s.end_mm() + reach_lag_ * vtop_pc_, r);
   }
 
   const bool contiguous = have_prev_ && prev_end_mm_ == s.s0_mm;
@@ -652,9 +663,10 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   // its step at once (or, active at once, below the steps still in the filter) holds it.
   late_check_ = false;
   if (!late_hold_) {
-    // Every cap it brings starts at or after s0 − (2 + lag)·v_hi (joint caps: (1 + lag)·Vg, and a
-    // lattice cap's entry V before that; Vg ≤ the faster side's cap). From c − p ≥ d/r_lo,
-    // σ(c) − σ_p ≥ d = u²/(2·A0) + u + A0 and both key forms (3.) give a bound ≥ u there.
+    // Every cap it brings starts at or after s0 − (2 + reach_lag)·v_hi (joint caps: (1 +
+    // reach_lag)·Vg, and a lattice cap's entry V before that; Vg ≤ the faster side's cap). From c −
+    // p ≥ d/r_lo, σ(c) − σ_p ≥ d = u²/(2·A0) + u + A0 and both key forms (3.) give a bound ≥ u
+    // there.
     const double v_hi =
         std::max({vcap, s.feed_pc * or_max_, have_prev_ ? vcap_[buf_.slot(prev_index_)] : 0.0});
     // (With this block's own r and the lowest its joint's zone may have, kZoneFloor of the
@@ -663,7 +675,8 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
     const double r_prev = have_prev_ ? ratio_[buf_.slot(prev_index_)] : 1.0;
     const double r_lo =
         std::max(1e-6, std::min({1.0, r_zone_.min(), r, kZoneFloor * std::min(r, r_prev)}));
-    const double near_mm = (2 + lag_) * v_hi + (step_ * step_ / (2 * a0_) + step_ + a0_) / r_lo;
+    const double near_mm =
+        (2 + reach_lag_) * v_hi + (step_ * step_ / (2 * a0_) + step_ + a0_) / r_lo;
     if (pos_mm_ + near_mm >= s.s0_mm) {
       late_m_ = step_;
       for (const double x : recent_) late_m_ = std::max(late_m_, x);
@@ -675,7 +688,7 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   if (late_check_) {
     late_sigma_p_ = sigma_at(pos_mm_);
     const double v[2] = {vcap, s.feed_pc};
-    const double reach_k[2] = {lag_ * vcap, lag_ * s.feed_pc * or_max_};
+    const double reach_k[2] = {reach_lag_ * vcap, reach_lag_ * s.feed_pc * or_max_};
     for (std::size_t k = 0; k < 2; ++k) {
       // The same limit as the previous segment extends its cap: nothing new (see below).
       const std::size_t from = 3 * buf_.slot(prev_index_) + k;
@@ -696,9 +709,9 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   update_r(index);
   sigma0_[slot] = sigma_total_;
   sigma_total_ += seg_sigma(slot, s.length_mm);
-  // With a filter after this type (8.) a cap reaches lag·V further on both sides (a feed cap's
-  // speed is up to OR_max·F).
-  const double reach[2] = {lag_ * vcap, lag_ * s.feed_pc * or_max_};
+  // With a filter after this type (8.) a cap reaches reach_lag·V further on both sides (a feed
+  // cap's speed is up to OR_max·F).
+  const double reach[2] = {reach_lag_ * vcap, reach_lag_ * s.feed_pc * or_max_};
   auto widened = [&](double v, bool feed, bool lattice, double r_reach) {
     Cap cap{s.s0_mm - r_reach, s.end_mm() + r_reach, v, sigma0_[slot], feed, lattice};
     if (r_reach > 0) cap.sigma_c = sigma_at(cap.c_mm);
@@ -735,8 +748,8 @@ void AccelLimitedAccDec::insert_joint_cap(std::size_t slot_a, std::size_t slot_b
                                           double len_a, double vg) {
   // σ(j − Vg), exact (inside a directly, before a by a search of the buffer): a key with a σ
   // lower than the true σ(c) would make the bound reach 0 before c (a stall) where r < 1.
-  // The cap covers the step before and after the joint, and lag·Vg more with a filter (8.).
-  const double w = vg * (1 + lag_);
+  // The cap covers the step before and after the joint, and reach_lag·Vg more with a filter (8.).
+  const double w = vg * (1 + reach_lag_);
   const double c_mm = joint_mm - w;
   const double sigma_c =
       w <= len_a ? sigma0_[slot_a] + seg_sigma(slot_a, len_a - w) : sigma_at(c_mm);
@@ -830,8 +843,8 @@ void AccelLimitedAccDec::on_retire(std::uint64_t index) {
 bool AccelLimitedAccDec::detach(std::uint64_t index) {
   // The caps of a segment the tool has passed are active ones (their range started behind the
   // tool) whose range reaches past it: a joint cap [j − Vg, j + Vg) over segments shorter than
-  // Vg, or any cap widened by lag·V with a filter (8.). They move to the overflow positions of
-  // their kind (3·(capacity + i) + k, so that pos % 3 still tells a joint cap), kept as a set
+  // Vg, or any cap widened by reach_lag·V with a filter (8.). They move to the overflow positions
+  // of their kind (3·(capacity + i) + k, so that pos % 3 still tells a joint cap), kept as a set
   // where none dominates another (lower V and later end); a cap dominated by one there is
   // dropped, and with all kOverflow taken it merges with the one of the nearest V as
   // (min V, max e): stricter than each, so every cap still holds. (A single merged position
@@ -1582,7 +1595,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   // program's feed, and the zone sized for them let the speed change by little more than the
   // floor's share (bench/README (c)). Sized for F instead, with a joint cap of F so that it
   // holds at any override: F the highest feed of the segments the pairs around the joint can
-  // start in, [j − (2 + lag)·V, j + V] (b at least V long, the walk back over at most
+  // start in, [j − (2 + reach_lag)·V, j + V] (b at least V long, the walk back over at most
   // kZoneWalk segments ahead of the tool's), so that at ≤ 100 % the cap costs nothing. Only
   // where that leaves the speed change more room (below). Sizing for OR_max·F without a cap
   // instead changed nothing on the built-in machine (200 % of F 6 000 is above its top speed).
@@ -1591,7 +1604,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     if (!(b.length_mm >= vf)) return kInf;
     double from = a.s0_mm;
     std::size_t walked = 0;
-    for (std::uint64_t k = index_a; from > a.end_mm() - (2 + lag_) * vf;) {
+    for (std::uint64_t k = index_a; from > a.end_mm() - (2 + reach_lag_) * vf;) {
       if (k <= std::max(cur_, buf_.begin_index())) return kInf;  // the tool's segment
       const Segment& x = buf_[--k];
       if (x.kind != ItemKind::kMotion) {
@@ -1779,7 +1792,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     }
     vj = std::min(vj, zone_chain_vg_);
   }
-  // A chain's zone must reach back over [j − (2 + lag)·V, j]; the walk below covers at most
+  // A chain's zone must reach back over [j − (2 + reach_lag)·V, j]; the walk below covers at most
   // kZoneWalk segments, so where they are shorter the chain is passed slower instead.
   if (chained && d < r_top * a0_) {
     double from = a.end_mm();
@@ -1796,9 +1809,9 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
       }
       from = buf_[k].s0_mm;
       ++walked;
-      if (from <= a.end_mm() - (2 + lag_) * vj) break;
+      if (from <= a.end_mm() - (2 + reach_lag_) * vj) break;
     }
-    if (limited) vj = std::min(vj, (a.end_mm() - from) / (2 + lag_));
+    if (limited) vj = std::min(vj, (a.end_mm() - from) / (2 + reach_lag_));
   }
   // The joint's cap: the passing speed, or lower where the floor or a chain needs it.
   const double cap_v = std::min(vj, zone_chain_vg_);
@@ -1821,14 +1834,14 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
   // Every step within V of the joint is ≤ V: the joint cap's Vg when there is one, else the
   // segments' caps.
   const double v = std::min(cap_v < 0.999 * around ? cap_v : around, v_feed);
-  const double zone_from = a.end_mm() - (2 + lag_) * v - chain_mm;
+  const double zone_from = a.end_mm() - (2 + reach_lag_) * v - chain_mm;
   if (late_check_ && !late_hold_) {
     // The block's range caps and the joint cap on_joint() will set (6.), with σ(c) no higher
     // than the zone below leaves it (r ≥ min(r_lo, r_j) over [zone start, c]).
     Cap joint_cap{0, 0, 0, 0, false, false};
     const double vg = std::min({corner, around, cap_v});
     if (vg < 0.999 * around) {
-      const double w = vg * (1 + lag_);
+      const double w = vg * (1 + reach_lag_);
       joint_cap = {a.end_mm() - w, a.end_mm() + w, vg, 0, false, vg >= a0_};
     }
     check_late(a.end_mm(), std::max(zone_from, pos_mm_), rj < r_hi ? rj : 1,
@@ -1880,7 +1893,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     first = k;
     ++walked;
   }
-  const double head = (1 + lag_) * v;
+  const double head = (1 + reach_lag_) * v;
   add_head(slot_b, std::min(b.length_mm, head), rj, rjd);
   // (A plain zone, or a chain's: the walk covered it whole, over motion items only.)
   if (lag_ == 0 && !a.arc && !b.arc && !chained && walked >= 1 && walked <= kRezoneWalk &&
