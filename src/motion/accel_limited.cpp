@@ -245,10 +245,10 @@
 //    c − W + (T2 − 1)/2·V = c. Likewise x_{T2−1} < e + W. So it averages only steps ≤ V. Its
 //    acceleration averages the step changes over one commanded step more: (T2 + 1)/2·V. The
 //    post filter averages axis positions off the path; it keeps its whole Tp·V. So, with
-//    reach_lag = (T2 + 1)/2 + Tp (T2 + Tp until session 16: zigzag_0.002 at T2 = 4 ran 34.54 s,
-//    now 29.54):
-//      - every cap reaches reach_lag·V further on both sides, a corner
-//        [j − (1 + reach_lag)·Vg, j + (1 + reach_lag)·Vg);
+//    cap_lag = (T2 − 1)/2 + Tp and reach_lag = (T2 + 1)/2 + Tp (both T2 + Tp until session 16:
+//    zigzag_0.002 at T2 = 4 ran 34.54 s, now 26.54):
+//      - every cap reaches cap_lag·V further on both sides, a corner
+//        [j − (1 + cap_lag)·Vg, j + (1 + cap_lag)·Vg);
 //      - a joint zone (7.) spans [j − (2 + reach_lag)·V, j + (1 + reach_lag)·V] (past b into the
 //        segments after it through a carried head zone);
 //      - the output at p averages the commanded accelerations up to reach_lag·v ahead of p, so
@@ -570,7 +570,8 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       lag_((limits.t2_cycles > 1 ? limits.t2_cycles : 0.0) +
            (limits.post_filter() ? limits.post_cycles : 0.0)),
       reach_lag_((limits.t2_cycles > 1 ? 0.5 * (limits.t2_cycles + 1.0) : 0.0) +
-                 (limits.post_filter() ? limits.post_cycles : 0.0)) {
+                 (limits.post_filter() ? limits.post_cycles : 0.0)),
+      cap_lag_(reach_lag_ - (limits.t2_cycles > 1 ? 1.0 : 0.0)) {
   // Free ids, lowest on top.
   for (std::size_t k = 0; k < 3; ++k) {
     for (std::size_t i = 0; i < pool_; ++i) {
@@ -688,7 +689,7 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   if (late_check_) {
     late_sigma_p_ = sigma_at(pos_mm_);
     const double v[2] = {vcap, s.feed_pc};
-    const double reach_k[2] = {reach_lag_ * vcap, reach_lag_ * s.feed_pc * or_max_};
+    const double reach_k[2] = {cap_lag_ * vcap, cap_lag_ * s.feed_pc * or_max_};
     for (std::size_t k = 0; k < 2; ++k) {
       // The same limit as the previous segment extends its cap: nothing new (see below).
       const std::size_t from = 3 * buf_.slot(prev_index_) + k;
@@ -709,9 +710,9 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   update_r(index);
   sigma0_[slot] = sigma_total_;
   sigma_total_ += seg_sigma(slot, s.length_mm);
-  // With a filter after this type (8.) a cap reaches reach_lag·V further on both sides (a feed
+  // With a filter after this type (8.) a cap reaches cap_lag·V further on both sides (a feed
   // cap's speed is up to OR_max·F).
-  const double reach[2] = {reach_lag_ * vcap, reach_lag_ * s.feed_pc * or_max_};
+  const double reach[2] = {cap_lag_ * vcap, cap_lag_ * s.feed_pc * or_max_};
   auto widened = [&](double v, bool feed, bool lattice, double r_reach) {
     Cap cap{s.s0_mm - r_reach, s.end_mm() + r_reach, v, sigma0_[slot], feed, lattice};
     if (r_reach > 0) cap.sigma_c = sigma_at(cap.c_mm);
@@ -748,8 +749,8 @@ void AccelLimitedAccDec::insert_joint_cap(std::size_t slot_a, std::size_t slot_b
                                           double len_a, double vg) {
   // σ(j − Vg), exact (inside a directly, before a by a search of the buffer): a key with a σ
   // lower than the true σ(c) would make the bound reach 0 before c (a stall) where r < 1.
-  // The cap covers the step before and after the joint, and reach_lag·Vg more with a filter (8.).
-  const double w = vg * (1 + reach_lag_);
+  // The cap covers the step before and after the joint, and cap_lag·Vg more with a filter (8.).
+  const double w = vg * (1 + cap_lag_);
   const double c_mm = joint_mm - w;
   const double sigma_c =
       w <= len_a ? sigma0_[slot_a] + seg_sigma(slot_a, len_a - w) : sigma_at(c_mm);
@@ -843,7 +844,7 @@ void AccelLimitedAccDec::on_retire(std::uint64_t index) {
 bool AccelLimitedAccDec::detach(std::uint64_t index) {
   // The caps of a segment the tool has passed are active ones (their range started behind the
   // tool) whose range reaches past it: a joint cap [j − Vg, j + Vg) over segments shorter than
-  // Vg, or any cap widened by reach_lag·V with a filter (8.). They move to the overflow positions
+  // Vg, or any cap widened by cap_lag·V with a filter (8.). They move to the overflow positions
   // of their kind (3·(capacity + i) + k, so that pos % 3 still tells a joint cap), kept as a set
   // where none dominates another (lower V and later end); a cap dominated by one there is
   // dropped, and with all kOverflow taken it merges with the one of the nearest V as
@@ -1841,7 +1842,7 @@ void AccelLimitedAccDec::joint_zones(std::uint64_t index_a, std::size_t slot_b, 
     Cap joint_cap{0, 0, 0, 0, false, false};
     const double vg = std::min({corner, around, cap_v});
     if (vg < 0.999 * around) {
-      const double w = vg * (1 + reach_lag_);
+      const double w = vg * (1 + cap_lag_);
       joint_cap = {a.end_mm() - w, a.end_mm() + w, vg, 0, false, vg >= a0_};
     }
     check_late(a.end_mm(), std::max(zone_from, pos_mm_), rj < r_hi ? rj : 1,

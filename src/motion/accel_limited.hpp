@@ -324,12 +324,13 @@ class AccelLimitedAccDec final : public AccDec {
   std::uint64_t mismatches_ = 0;
 
   // Jerk stage and post filter (8.): the output averages the commanded steps over lag_ cycles
-  // at most, and every cap reaches reach_lag_·V further on both sides.
+  // at most; a cap reaches cap_lag_·V further on both sides, a zone or a carried r
+  // reach_lag_·V.
   MovingAverage jerk_;
   bool jerk_on_ = false;
   double lag_ = 0;
-  // How far a cap, a zone or a carried r reaches for them: (T2 + 1)/2 + Tp (8.).
-  double reach_lag_ = 0;
+  double reach_lag_ = 0;  // (T2 + 1)/2 + Tp
+  double cap_lag_ = 0;    // (T2 − 1)/2 + Tp
   double tool_mm_ = 0, tool_step_ = 0;
   double vtop_pc_ = 0;  // the highest step any segment so far allows (the r carry's reach)
   struct Carry {
