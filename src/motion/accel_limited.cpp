@@ -136,8 +136,7 @@
 //    at the block's end, with its r and its joint zone's (check_stop()); insert() tests what
 //    these did not foresee (on_joint()'s cap for two corners in one cycle). Only when the tool
 //    is near enough for anything to bind: every cap starts at or after s0 − (2 + reach_lag)·v_hi
-//    (8.), and
-//    from c − p ≥ (u²/(2·A0) + u + A0)/r_lo on no key bound is below the step u (r_lo the
+//    (8.), and from c − p ≥ (u²/(2·A0) + u + A0)/r_lo on no key bound is below the step u (r_lo the
 //    window's, the block's, and kZoneFloor × the lower r at its joint, the lowest its zone
 //    may have). If one binds, the block is *held*: the window's end it
 //    arrived at (hold_mm_) stays a stop, the caps of every block arriving meanwhile wait in
@@ -664,10 +663,10 @@ void AccelLimitedAccDec::on_segment(std::uint64_t index, const Segment& s) {
   // its step at once (or, active at once, below the steps still in the filter) holds it.
   late_check_ = false;
   if (!late_hold_) {
-    // Every cap it brings starts at or after s0 − (2 + reach_lag)·v_hi (joint caps: (1 +
-    // reach_lag)·Vg, and a lattice cap's entry V before that; Vg ≤ the faster side's cap). From c −
-    // p ≥ d/r_lo, σ(c) − σ_p ≥ d = u²/(2·A0) + u + A0 and both key forms (3.) give a bound ≥ u
-    // there.
+    // Every cap it brings starts at or after s0 − (2 + reach_lag)·v_hi: joint caps
+    // (1 + cap_lag)·Vg before the joint, a lattice cap's entry V before that, and Vg ≤ the
+    // faster side's cap (8.). From c − p ≥ d/r_lo on, σ(c) − σ_p ≥ d = u²/(2·A0) + u + A0, and
+    // both key forms (3.) give a bound ≥ u there.
     const double v_hi =
         std::max({vcap, s.feed_pc * or_max_, have_prev_ ? vcap_[buf_.slot(prev_index_)] : 0.0});
     // (With this block's own r and the lowest its joint's zone may have, kZoneFloor of the
