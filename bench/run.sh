@@ -196,6 +196,20 @@ PY
   echo "$row" >>"$results"
   echo "$row" | awk -F'\t' '{printf "%-44s %8s %10s %10s %10s %7s %7s %8s %8s %7s\n", $1,$2,$3,$4,$5,$6,$7,$8,$9,$10}'
 done
+# The whole table in one line per type: geometric mean and largest look/b, the programs above 1.05.
+python3 - "$results" <<'PY'
+import csv, math, sys
+rows = [r for r in csv.DictReader(open(sys.argv[1]), delimiter="\t")]
+for col in ("look/bound", "stop/bound"):
+    vals = [(float(r[col]), r["program"]) for r in rows if r[col] not in ("", "-")]
+    if not vals:
+        continue
+    gm = math.exp(sum(math.log(v) for v, _ in vals) / len(vals))
+    top = max(vals)
+    over = ", ".join(f"{p} {v:.3f}" for v, p in sorted(vals, reverse=True) if v > 1.05)
+    print(f"{col}: geometric mean {gm:.3f} over {len(vals)} programs, largest {top[0]:.3f} "
+          f"({top[1]}); above 1.05: {over or 'none'}")
+PY
 echo "(look/b, stop/b: cycle time / time-optimal bound; wall, Mcyc/s, RSS: the look-ahead run,"
 echo " including interpretation and the summary; table also in $results)"
 
