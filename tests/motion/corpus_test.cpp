@@ -102,10 +102,12 @@ struct Case {
   CorpusProgram program;
   Mode mode = Mode::kLookahead;
   AccDecType accdec = AccDecType::kMovingAverage;  // look-ahead's acc/dec type (issue 9)
+  bool jerk = false;  // acceleration type with a jerk stage of T2 = 4 cycles (Jmax 10⁶ mm/s³)
 };
 
 const char* case_suffix(const Case& c) {
   if (c.mode == Mode::kStop) return "stop";
+  if (c.jerk) return "acceleration+jerk";
   return c.accdec == AccDecType::kAcceleration ? "acceleration" : "lookahead";
 }
 
@@ -120,6 +122,8 @@ std::vector<Case> all_cases() {
     // Explicit types: the moving-average cases stay on the seed's type whatever the default.
     out.push_back({p, Mode::kLookahead, AccDecType::kMovingAverage});
     out.push_back({p, Mode::kLookahead, AccDecType::kAcceleration});
+    // The jerk stage widens every cap and zone (accel_limited.cpp, 8.): real programs with it.
+    out.push_back({p, Mode::kLookahead, AccDecType::kAcceleration, true});
     if (p.stop_mode) out.push_back({p, Mode::kStop});
   }
   return out;
@@ -162,7 +166,8 @@ TEST_P(CorpusRun, KeepsP1ToP4) {
   const KnownViolation& known = c.mode == Mode::kStop                    ? c.program.stop
                                 : c.accdec == AccDecType::kMovingAverage ? c.program.lookahead
                                                                          : c.program.acceleration;
-  const MachineConfig machine = default_machine_config();
+  MachineConfig machine = default_machine_config();
+  if (c.jerk) machine.max_jerk_mm_s3 = 1e6;  // T2 = ⌈2·Amax/(Jmax·τ)⌉ = 4 cycles
   sim::RunOptions options;
   options.kernel.mode = c.mode;
   options.kernel.accdec = c.accdec;
@@ -212,6 +217,7 @@ std::string case_name(const ::testing::TestParamInfo<Case>& info) {
     if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
   }
   if (info.param.mode == Mode::kStop) return n + "_Stop";
+  if (info.param.jerk) return n + "_AccelerationJerk";
   return n + (info.param.accdec == AccDecType::kAcceleration ? "_Acceleration" : "_Lookahead");
 }
 
