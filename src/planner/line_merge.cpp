@@ -29,7 +29,8 @@ double angle(const Vec3& a, const Vec3& b) {
 
 bool LineMerger::extends(const Block& b, Cone& cone) const {
   const Block& a = line_;
-  if (a.path_mode != PathMode::kBlend || pieces_ == kMaxPieces) return false;
+  if (a.path_mode != PathMode::kBlend || pieces_ >= kMaxPiecesShort) return false;
+  if (pieces_ >= kMaxPieces && norm(a.end.xyz() - a.start.xyz()) >= kShortLineMm) return false;
   if (b.kind != a.kind || b.tolerance_mm != a.tolerance_mm ||
       b.override_fixed != a.override_fixed ||
       std::isnan(b.correction) != std::isnan(a.correction)) {

@@ -18,10 +18,11 @@
 // good setting), and passes no vertex the pieces did not program. A piece
 // whose end must be held (G61 exact path, G61.1 / G9 exact stop) ends the merge: the vertex
 // stays exact. The test costs O(1) per piece (a cone of allowed directions, line_merge.cpp);
-// at most kMaxPieces per line. The line keeps its first piece's source line (Block::line; what
-// the samples on it carry) and names its last piece's in Block::last_line (the reports' "lines
-// A-B"), and it carries its first and last pieces' directions: the corners at its ends are the
-// pieces' corners, which may turn more than the chord's (planner::joint_speed_pc keeps both).
+// at most kMaxPieces per line (more while it is shorter than kShortLineMm). The line keeps its
+// first piece's source line (Block::line; what the samples on it carry) and names its last piece's
+// in Block::last_line (the reports' "lines A-B"), and it carries its first and last pieces'
+// directions: the corners at its ends are the pieces' corners, which may turn more than the chord's
+// (planner::joint_speed_pc keeps both).
 //
 // On by default ([motion] merge_tolerance_mm = 0.0005; 0 turns it off; off in stop mode): the
 // random 2 000-segment program cut into 100× pieces runs in the time of the original (85.89 s
@@ -57,7 +58,13 @@ class LineMerger {
   // The blocks ready, in program order.
   bool next(Block& out);
 
+  // A line takes at most kMaxPieces pieces, or kMaxPiecesShort while it is shorter than
+  // kShortLineMm: sub-µm pieces (a refined program) then still make lines of up to 1 mm instead
+  // of 0.1 mm ones, whose straight joints each cost the cycle a segment (stress_test refined
+  // 100×: 1 230 lines instead of the original's 149).
   static constexpr std::size_t kMaxPieces = 1024;
+  static constexpr std::size_t kMaxPiecesShort = 65536;
+  static constexpr double kShortLineMm = 1.0;
 
  private:
   // The directions from the line's start that pass within the tolerance of every inner vertex

@@ -89,6 +89,34 @@ TEST(LineMerge, RoundedPiecesOfALineBecomeTheLine) {
   expect_covers(in, out, kTol);
 }
 
+// A line takes at most 1 024 pieces once it is 1 mm long, but up to 65 536 while it is shorter:
+// pieces of 0.1 µm (a refined program) make one line of 0.8 mm, not 8 of 0.1 mm, and pieces of
+// 1 µm still split a 3 mm line every 1 024.
+TEST(LineMerge, PieceLimitCountsOnlyOnceTheLineIsAMillimetreLong) {
+  const Vec3 a{0.1, -0.2, 3}, dir{0.6, -0.64, 0.48};
+  auto pieces = [&](int n, double len_mm) {
+    std::vector<Block> in;
+    Vec3 p = a;
+    for (int i = 1; i <= n; ++i) {
+      const Vec3 q = rounded(a + (len_mm * i) * dir, 1e-9);
+      in.push_back(line(p, q));
+      p = q;
+    }
+    return in;
+  };
+  const auto fine = pieces(8000, 0.0001);
+  LineMerger m1(kTol, kTurn);
+  const auto out1 = run(m1, fine);
+  EXPECT_EQ(out1.size(), 1u);
+  expect_covers(fine, out1, kTol);
+  const auto coarse = pieces(3000, 0.001);
+  LineMerger m2(kTol, kTurn);
+  const auto out2 = run(m2, coarse);
+  ASSERT_EQ(out2.size(), 3u);
+  EXPECT_EQ(out2[0].end, coarse[LineMerger::kMaxPieces - 1].end);
+  expect_covers(coarse, out2, kTol);
+}
+
 TEST(LineMerge, KeepsCornersFeedsStopsAndEvents) {
   LineMerger m(kTol, kTurn);
   std::vector<Block> in;
