@@ -584,14 +584,14 @@ int run(int argc, char** argv) {
     const double bound = cncore::bound::optimal_time_s(blocks, lim);
     const std::size_t cycles = res.s.size() - 1;
     const double t = static_cast<double>(cycles) * lim.period_s;
+    const double per_cycle = 1.0 / static_cast<double>(std::max<std::size_t>(cycles, 1));
     std::printf(
         "cycles=%zu time_s=%.3f bound_s=%.4f ratio=%.4f segments=%zu length_mm=%.3f "
         "per_bin=%zu bins_per_a=%g grid=%zu factor=%g max_beam=%zu expanded=%zu search_s=%.1f "
         "states_per_cycle=%.1f us_per_cycle=%.1f\n",
         cycles, t, bound, bound > 0 ? t / bound : 0.0, pb.segments(), pb.length(), opt.per_bin,
         opt.bins_per_a, opt.grid, opt.factor, res.max_beam, res.expanded, secs,
-        static_cast<double>(res.expanded) / static_cast<double>(std::max<std::size_t>(cycles, 1)),
-        1e6 * secs / static_cast<double>(std::max<std::size_t>(cycles, 1)));
+        static_cast<double>(res.expanded) * per_cycle, 1e6 * secs * per_cycle);
     return 0;
   } catch (const cncore::InputError& e) {
     std::fprintf(stderr, "%s\n", e.formatted().c_str());

@@ -392,6 +392,13 @@ using planner::Segment;
 
 namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// The filters after this type (8.): the jerk stage's T2 and the post filter's Tp, 0 when off.
+double jerk_cycles(const planner::Limits& l) {
+  return l.t2_cycles > 1 ? l.t2_cycles : 0.0;
+}
+double post_cycles(const planner::Limits& l) {
+  return l.post_filter() ? l.post_cycles : 0.0;
+}
 constexpr double kArcNormalShare = 0.95;  // a_n ≤ 0.95·g on arcs where the axes couple
 constexpr double kRecoverShare = 0.98;  // √(a_t² + a_n²) ≤ 0.98·g slowing down on an arc (5.)
 // Joint zones (7.): the speed change allowed at a joint is at least this share of the segments'
@@ -566,11 +573,9 @@ AccelLimitedAccDec::AccelLimitedAccDec(const planner::SegmentBuffer& buffer,
       check_(check_reference_walk),
       jerk_(limits.t2_cycles > 1 ? limits.t2_cycles : 1),
       jerk_on_(limits.t2_cycles > 1),
-      lag_((limits.t2_cycles > 1 ? limits.t2_cycles : 0.0) +
-           (limits.post_filter() ? limits.post_cycles : 0.0)),
-      reach_lag_((limits.t2_cycles > 1 ? 0.5 * (limits.t2_cycles + 1.0) : 0.0) +
-                 (limits.post_filter() ? limits.post_cycles : 0.0)),
-      cap_lag_(reach_lag_ - (limits.t2_cycles > 1 ? 1.0 : 0.0)) {
+      lag_(jerk_cycles(limits) + post_cycles(limits)),
+      reach_lag_((jerk_on_ ? 0.5 * (jerk_cycles(limits) + 1) : 0.0) + post_cycles(limits)),
+      cap_lag_(reach_lag_ - (jerk_on_ ? 1.0 : 0.0)) {
   // Free ids, lowest on top.
   for (std::size_t k = 0; k < 3; ++k) {
     for (std::size_t i = 0; i < pool_; ++i) {

@@ -30,7 +30,6 @@ double angle(const Vec3& a, const Vec3& b) {
 bool LineMerger::extends(const Block& b, Cone& cone) const {
   const Block& a = line_;
   if (a.path_mode != PathMode::kBlend || pieces_ >= kMaxPiecesShort) return false;
-  if (pieces_ >= kMaxPieces && norm(a.end.xyz() - a.start.xyz()) >= kShortLineMm) return false;
   if (b.kind != a.kind || b.tolerance_mm != a.tolerance_mm ||
       b.override_fixed != a.override_fixed ||
       std::isnan(b.correction) != std::isnan(a.correction)) {
@@ -51,7 +50,8 @@ bool LineMerger::extends(const Block& b, Cone& cone) const {
   // both boundaries, so it lies inside both.
   const Vec3 p0 = a.start.xyz();
   const Vec3 v = a.end.xyz() - p0;
-  const double r = norm(v);
+  const double r = norm(v);  // (also the line's length so far)
+  if (pieces_ >= kMaxPieces && r >= kShortLineMm) return false;
   if (!(r > cone_.r_mm)) return false;  // inner vertices ever farther from P0: in order
   cone = cone_;
   const Vec3 vu = (1 / r) * v;
