@@ -1,7 +1,6 @@
 #include "planner/line_merge.hpp"
 
 #include <cmath>
-#include <numbers>
 
 namespace cncore::planner {
 namespace {
@@ -21,11 +20,13 @@ Vec3 unit_direction(const Block& b) {
   return (1 / norm(d)) * d;
 }
 
-double angle(const Vec3& a, const Vec3& b) {
-  return std::atan2(norm(cross(a, b)), dot(a, b));  // exact at small angles, unlike acos
-}
-
 }  // namespace
+
+// x ≤ y, for x a sum of angles in [0, 3π/2] and y in [0, π/2]: x lies in [0, π/2] only if its
+// cosine and sine are both ≥ 0, and then y − x is in [−π/2, π/2], where sin(y − x) ≥ 0 decides.
+bool LineMerger::within(const Angle& x, const Angle& y) {
+  return x.c >= 0 && x.s >= 0 && y.s * x.c - y.c * x.s >= 0;
+}
 
 bool LineMerger::extends(const Block& b, Cone& cone) const {
   const Block& a = line_;
@@ -43,11 +44,16 @@ bool LineMerger::extends(const Block& b, Cone& cone) const {
   const Vec3 piece = b.end.xyz() - b.start.xyz();
   if (dot(last_dir_, piece) < min_cos_ * norm(piece)) return false;  // turns by more
   // The line's end becomes an inner vertex v at r = |v − P0| from its start P0: the line from
-  // P0 along a direction e passes within δ of v when angle(e, v − P0) ≤ asin(δ/r). The
+  // P0 along a direction e passes within δ of v when angle(e, v − P0) ≤ β = asin(δ/r). The
   // directions allowed by every inner vertex so far are kept as one cone inside their
   // intersection (O(1) per piece): on the great circle from the cone's axis to v the two caps
-  // overlap in [γ − β, α] (γ the angle between the axes), and the cap centred there touches
-  // both boundaries, so it lies inside both.
+  // (half-angles α and β, axes γ apart) overlap in [γ − β, α], and the cap centred there (axis
+  // turned by m = (γ − β + α)/2 towards v, half-angle h = (α + β − γ)/2) touches both
+  // boundaries, so it lies inside both. Angles are kept as (cos, sin) pairs: sums by the
+  // addition theorems, halves as in Angle::half(), and x ≤ y by sin(y − x) ≥ 0 (within()),
+  // which stays exact at the µrad angles of long lines where comparing cosines would not, and
+  // costs no trigonometric call (asin, atan2, cos, sin per piece were 24 % of the kernel's
+  // push side on refined programs). After the first vertex α, β ≤ π/2.
   const Vec3 p0 = a.start.xyz();
   const Vec3 v = a.end.xyz() - p0;
   const double r = norm(v);  // (also the line's length so far)
@@ -55,25 +61,34 @@ bool LineMerger::extends(const Block& b, Cone& cone) const {
   if (!(r > cone_.r_mm)) return false;  // inner vertices ever farther from P0: in order
   cone = cone_;
   const Vec3 vu = (1 / r) * v;
-  const double beta = r > tolerance_mm_ ? std::asin(tolerance_mm_ / r) : std::numbers::pi / 2;
-  const double gamma = cone.r_mm == 0 ? 0.0 : angle(cone.axis, vu);
-  cone.r_mm = r;
-  if (gamma + beta <= cone.half_angle) {
-    cone.axis = vu;  // v's cap inside the cone
-    cone.half_angle = beta;
-  } else if (gamma + cone.half_angle > beta) {  // (else the cone is inside v's cap)
-    const double h = 0.5 * (cone.half_angle + beta - gamma);
-    if (!(h > 0)) return false;  // no direction passes near every vertex
-    const double m = 0.5 * (gamma - beta + cone.half_angle);
-    const Vec3 w = vu - dot(vu, cone.axis) * cone.axis;  // towards v, ⟂ the axis
-    const double wn = norm(w);
-    if (wn > 0) cone.axis = std::cos(m) * cone.axis + (std::sin(m) / wn) * w;
-    cone.half_angle = h;
+  const Angle beta = r > tolerance_mm_ ? Angle::from_sin(tolerance_mm_ / r) : Angle{0, 1};
+  if (cone.r_mm == 0) {  // the whole sphere: v's cap
+    cone.axis = vu;
+    cone.half = beta;
+  } else {
+    const Angle alpha = cone.half;
+    const Angle gamma{dot(cone.axis, vu), norm(cross(cone.axis, vu))};
+    if (within(gamma + beta, alpha)) {
+      cone.axis = vu;  // v's cap inside the cone
+      cone.half = beta;
+    } else if (!within(gamma + alpha, beta)) {  // (else the cone is inside v's cap)
+      // γ > |α − β| here, so x = α + β − γ < π, and once x > 0, 0 < y = γ + α − β < 2α ≤ π.
+      const Angle x = (alpha + beta) - gamma;
+      if (!(x.s > 0)) return false;  // h ≤ 0: no direction passes near every vertex
+      const Angle m = ((gamma + alpha) - beta).half();
+      const Vec3 w = vu - dot(vu, cone.axis) * cone.axis;  // towards v, ⟂ the axis
+      const double wn = norm(w);
+      if (wn > 0) cone.axis = m.c * cone.axis + (m.s / wn) * w;
+      cone.half = x.half();
+    }
   }
-  // The new chord must lie in the cone and reach past the last inner vertex.
+  cone.r_mm = r;
+  // The new chord must lie in the cone (angle ≤ h ≤ π/2: cos ≥ 0 and sin(h − angle) ≥ 0) and
+  // reach past the last inner vertex.
   const Vec3 chord = b.end.xyz() - p0;
-  const double len = norm(chord);
-  return len > r && angle(cone.axis, chord) <= cone.half_angle;
+  const double along = dot(cone.axis, chord);
+  return norm(chord) > r && along >= 0 &&
+         cone.half.s * along >= cone.half.c * norm(cross(cone.axis, chord));
 }
 
 void LineMerger::emit(const Block& b) {

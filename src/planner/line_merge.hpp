@@ -70,11 +70,31 @@ class LineMerger {
   // The directions from the line's start that pass within the tolerance of every inner vertex
   // (a cone inside their intersection; the whole sphere before the first), and the distance
   // of the last inner vertex from the start.
+  // An angle as its cosine and sine (the cone test needs no trigonometric call, line_merge.cpp).
+  struct Angle {
+    double c = 1, s = 0;
+    static Angle from_sin(double sn) { return {std::sqrt(1 - sn * sn), sn}; }  // in [0, π/2]
+    // x/2 for x in [0, π]: (1 + cos x, sin x) and (sin x, 1 − cos x) both point at x/2; of the
+    // two, the one without cancellation (near x = π, 1 + cos x keeps no digits).
+    Angle half() const {
+      const double hc = c >= 0 ? 1 + c : s;
+      const double hs = c >= 0 ? s : 1 - c;
+      const double n = std::sqrt(hc * hc + hs * hs);
+      return {hc / n, hs / n};
+    }
+    friend Angle operator+(const Angle& x, const Angle& y) {
+      return {x.c * y.c - x.s * y.s, x.s * y.c + x.c * y.s};
+    }
+    friend Angle operator-(const Angle& x, const Angle& y) {
+      return {x.c * y.c + x.s * y.s, x.s * y.c - x.c * y.s};
+    }
+  };
   struct Cone {
     Vec3 axis{1, 0, 0};
-    double half_angle = 3.14159265358979323846;
+    Angle half{-1, 0};  // π: every direction
     double r_mm = 0;
   };
+  static bool within(const Angle& x, const Angle& y);
   bool extends(const Block& b, Cone& cone) const;
   void emit(const Block& b);
 
