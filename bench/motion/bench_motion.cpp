@@ -20,7 +20,8 @@
 //
 // The "_merged" programs are the same blocks handed to the kernel through the collinear-piece
 // stage of `cncore run` (planner/line_merge.hpp, [motion] merge_tolerance_mm): the stage's
-// work is timed with the pushes, as the interpretation is not.
+// work is timed with the pushes, as the interpretation is not. LineMerge/<program> times the
+// stage alone on them.
 #include <benchmark/benchmark.h>
 #include <sys/mman.h>
 #include <sys/resource.h>
@@ -313,6 +314,34 @@ void BM_Throughput(benchmark::State& state, LazyProgram* lazy, int type) {
   state.counters["blocks"] = static_cast<double>(prog->blocks.size());
   state.counters["kernel_heap_MB"] = static_cast<double>(construct_bytes) / 1e6;
   state.counters["allocs_in_run"] = static_cast<double>(run_allocs);
+}
+
+// The collinear-piece stage alone (planner/line_merge.hpp): every block of the program through
+// the built-in machine's LineMerger, no kernel. Mpieces_per_s: blocks put per second; lines_out:
+// the blocks it hands on.
+void BM_LineMerge(benchmark::State& state, LazyProgram* lazy) {
+  const Program* prog = &lazy->get();
+  if (!prog->ok) {
+    state.SkipWithError(prog->error.c_str());
+    return;
+  }
+  std::uint64_t pieces = 0, lines = 0;
+  for (auto _ : state) {
+    planner::LineMerger merger = sim::make_line_merger(default_machine_config(), {});
+    Block out;
+    lines = 0;
+    for (const Block& b : prog->blocks) {
+      merger.put(b);
+      while (merger.next(out)) ++lines;
+    }
+    merger.finish();
+    while (merger.next(out)) ++lines;
+    benchmark::DoNotOptimize(out);
+    pieces += prog->blocks.size();
+  }
+  state.counters["Mpieces_per_s"] =
+      benchmark::Counter(static_cast<double>(pieces) * 1e-6, benchmark::Counter::kIsRate);
+  state.counters["lines_out"] = static_cast<double>(lines);
 }
 
 struct Percentiles {
@@ -609,6 +638,11 @@ int main(int argc, char** argv) {
   }
   if (prof_runs > 0) return profile(prof_name, prof_type, prof_runs);
   if (construct_n > 0) return construct(construct_type, construct_n);
+  for (LazyProgram& p : progs) {
+    if (p.merge)
+      benchmark::RegisterBenchmark(("LineMerge/" + p.name).c_str(), BM_LineMerge, &p)
+          ->Unit(benchmark::kMillisecond);
+  }
   for (int type = 0; type < 2; ++type) {
     for (LazyProgram& p : progs) {
       const std::string suffix = p.name + "/" + type_name(type);
