@@ -1,12 +1,13 @@
 // cncore-sref: an achievable sampled reference trajectory, searched cycle by cycle.
 //   cncore-sref PROGRAM.ngc -o TRAJ.csv [--machine FILE.toml] [--per-bin K] [--bins-per-a B]
 //               [--grid G] [--limit-factor M] [--bisect N] [--guide-joints J] [-v]
-//               [--trace FROM --trace-to TO]
+//               [--trace FROM --trace-to TO] [--certify]
 // Prints one line "cycles=… time_s=… bound_s=… ratio=… …" (ratio: time over cncore-bound's
-// bound). The trajectory has one row per cycle from the start (t = 0) to the arrival on the end
-// point (no trailing rest sample). Check it with `cncore-trajcheck PROGRAM TRAJ.csv`.
-// Typical cost: K=8, B=4, G=9 takes 5 s on a 10 000-segment, 11 000-cycle program; the time
-// grows about linearly with K·B and with G. Memory stays small (dead lineages are dropped).
+// bound); with --certify a second one (below). The trajectory has one row per cycle from the start
+// (t = 0) to the arrival on the end point (no trailing rest sample). Check it with
+// `cncore-trajcheck PROGRAM TRAJ.csv`. Typical cost: K=8, B=4, G=9 takes 5 s on a 10 000-segment,
+// 11 000-cycle program; the time grows about linearly with K·B and with G. Memory stays small (dead
+// lineages are dropped).
 //
 // Why: the continuous time-optimal bound (cncore-bound) passes every corner in zero time at
 // Vg = Amax·τ/(2 sin(θ/2)). A sampled trajectory is judged differently by the checker
@@ -50,6 +51,14 @@
 // which must be < D. C_j is joint j's effective cap: its own cap, its segment's, and the largest
 // crossing step from which joint j+1 can still be met (computed once, backwards from the end;
 // checked for the next joints of every state, each on its own).
+//
+// --certify asks what a planner that ran this search ahead of the tool could hand the cycle
+// (docs/lookahead.md, "A sample search ahead of the tool"). Every 64 cycles, the cycles whose
+// history holds one state are *committed*: every live state descends from them, so a planner
+// could give them to the cycle. Each committed state is then braked greedily (the smallest
+// feasible step every cycle) until the tool rests; a state that comes to rest so has a safe
+// continuation whatever the search finds later. The line reports how many committed states came
+// to rest, the longest such brake and the longest lag of the commits behind the search's front.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -91,6 +100,7 @@ struct Options {
   int bisect = 14;                           // bisection steps for the normal / per-axis boundary
   std::size_t guide_joints = 16;             // joints ahead checked by the backward guide
   std::size_t trace_from = 0, trace_to = 0;  // cycles with a diagnostic line on stderr
+  bool certify = false;                      // brake every committed state to rest (greedy)
 };
 
 // Every limit as a length per cycle (mm per τ or per τ²), already scaled by M.
@@ -323,11 +333,126 @@ void compact(std::vector<std::vector<Hist>>& history) {
   }
 }
 
+struct Eval {
+  double s2;
+  std::size_t seg2;
+  int ok;  // 1 ok, 0 static rule fails, −1 dynamic rule fails
+};
+
+// The landings a state may step to next: the candidates of the file comment, each judged by the
+// rules, plus the dynamic rules' boundaries found by bisection. Only feasible ones (ok == 1).
+class Expander {
+ public:
+  Expander(const Problem& pb, const Options& opt) : pb_(pb), opt_(opt) {}
+
+  void expand(const Node& nd, std::vector<Eval>& out) {
+    const Problem& pb = pb_;
+    const Options& opt = opt_;
+    const double a = pb.rules().a;
+    const auto& joints = pb.joints();
+    std::vector<double>& cand = cand_;
+    std::vector<Eval>& evals = evals_;
+    const double s = nd.s, d = nd.s - nd.sp;
+    const std::size_t seg = nd.seg;
+    const AxisVec p0 = pb.point(nd.sp, pb.seg_of(nd.sp, seg));
+    const AxisVec p1 = pb.point(s, seg);
+    const double lo = std::max(0.0, d - a), hi = d + a;
+    // Candidate landings: grid, then every joint in reach (on it, just before it, and the
+    // largest step the caps crossed so far allow).
+    cand.clear();
+    for (std::size_t i = 0; i < opt.grid; ++i) {
+      const double x =
+          opt.grid > 1 ? lo + (hi - lo) * static_cast<double>(i) / static_cast<double>(opt.grid - 1)
+                       : hi;
+      cand.push_back(s + x);
+    }
+    double cum = std::numeric_limits<double>::infinity();
+    for (std::size_t j = seg; j < joints.size(); ++j) {
+      const Joint& jt = joints[j];
+      if (jt.s <= s) continue;
+      if (jt.s > s + hi) break;
+      if (jt.s >= s + lo - kWindow) {
+        cand.push_back(jt.s);
+        cand.push_back(jt.s - kWindow);
+      }
+      cum = std::min(cum, jt.cap);
+      if (s + cum >= jt.s) cand.push_back(s + std::min(cum, hi));
+      if (jt.stop) break;
+    }
+    std::sort(cand.begin(), cand.end());
+    cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+    evals.clear();
+    for (const double s2 : cand) {
+      const double d2 = s2 - s;
+      // Rounding: s + x − s differs from x by some ulps of s (1e-13 mm at 500 mm).
+      if (d2 < lo - kRound || d2 > hi + kRound) continue;
+      Eval e{s2, seg, 0};
+      if (pb.step_ok(s, seg, s2, e.seg2))
+        e.ok = pb.dynamics_ok(p0, p1, pb.point(s2, e.seg2)) ? 1 : -1;
+      evals.push_back(e);
+    }
+    // Boundaries of the dynamic rules: bisect between a feasible candidate and an adjacent one
+    // that only the dynamic rules reject.
+    const std::size_t ne = evals.size();
+    for (std::size_t i = 0; i + 1 < ne; ++i) {
+      for (int dir = 0; dir < 2; ++dir) {
+        const Eval& good = evals[dir == 0 ? i : i + 1];
+        const Eval& bad = evals[dir == 0 ? i + 1 : i];
+        if (good.ok != 1 || bad.ok != -1) continue;
+        double g = good.s2, b = bad.s2;
+        std::size_t gseg = good.seg2;
+        for (int it = 0; it < opt.bisect; ++it) {
+          const double mid = 0.5 * (g + b);
+          std::size_t mseg = 0;
+          if (pb.step_ok(s, seg, mid, mseg) && pb.dynamics_ok(p0, p1, pb.point(mid, mseg))) {
+            g = mid;
+            gseg = mseg;
+          } else {
+            b = mid;
+          }
+        }
+        if (g != good.s2) evals.push_back({g, gseg, 1});
+      }
+    }
+    out.clear();
+    for (const Eval& e : evals)
+      if (e.ok == 1) out.push_back(e);
+  }
+
+ private:
+  const Problem& pb_;
+  const Options& opt_;
+  std::vector<double> cand_;
+  std::vector<Eval> evals_;
+};
+
 struct Result {
   std::vector<double> s;  // sample positions, s[0] = 0, s.back() = length
   std::size_t max_beam = 0;
   std::size_t expanded = 0;
+  // --certify: committed states (all live states descend from them), how many the greedy brake
+  // brought to rest, its longest brake in cycles, and the longest commit lag behind the front.
+  std::size_t committed = 0, certified = 0, longest_brake = 0, longest_lag = 0;
+  std::size_t first_uncertified = 0;  // cycle of the first state the greedy brake lost (0: none)
 };
+
+// Greedy bail-out: from a state, take the smallest feasible step every cycle until the tool
+// rests (step 0, or the end point reached as the checker's stop). A state it brings to rest has
+// a safe continuation whatever the search does next. Returns the cycles taken, 0 if it fails.
+std::size_t brake_to_rest(Expander& ex, const Problem& pb, Node n, std::vector<Eval>& evals) {
+  const double a = pb.rules().a;
+  for (std::size_t k = 1; k < 100000; ++k) {
+    ex.expand(n, evals);
+    const Eval* best = nullptr;
+    for (const Eval& e : evals)
+      if (!best || e.s2 < best->s2) best = &e;
+    if (!best) return 0;
+    const double d2 = best->s2 - n.s;
+    if (d2 == 0 || (best->s2 == pb.length() && d2 <= a)) return k;
+    n = {n.s, best->s2, static_cast<std::uint32_t>(best->seg2), -1};
+  }
+  return 0;
+}
 
 Result search(const Problem& pb, const Options& opt, bool verbose) {
   const Rules& r = pb.rules();
@@ -335,17 +460,11 @@ Result search(const Problem& pb, const Options& opt, bool verbose) {
   const double bin_w = a / opt.bins_per_a;
   const auto nbins = static_cast<std::size_t>(pb.max_step() / bin_w) + 2;
   const double end = pb.length();
-  const auto& joints = pb.joints();
 
   std::vector<Node> beam{{0.0, 0.0, 0, -1}}, children;
   std::vector<std::vector<Hist>> history;
   history.push_back({{0.0, -1}});
-  std::vector<double> cand;
-  struct Eval {
-    double s2;
-    std::size_t seg2;
-    int ok;  // 1 ok, 0 static rule fails, −1 dynamic rule fails
-  };
+  Expander ex(pb, opt);
   std::vector<Eval> evals;
   std::vector<std::uint32_t> order;
   Result res;
@@ -358,70 +477,9 @@ Result search(const Problem& pb, const Options& opt, bool verbose) {
     std::int32_t done = -1;
     for (std::size_t bi = 0; bi < beam.size() && done < 0; ++bi) {
       const Node& nd = beam[bi];
-      const double s = nd.s, d = nd.s - nd.sp;
-      const std::size_t seg = nd.seg;
-      const AxisVec p0 = pb.point(nd.sp, pb.seg_of(nd.sp, seg));
-      const AxisVec p1 = pb.point(s, seg);
-      const double lo = std::max(0.0, d - a), hi = d + a;
-      // Candidate landings: grid, then every joint in reach (on it, just before it, and the
-      // largest step the caps crossed so far allow).
-      cand.clear();
-      for (std::size_t i = 0; i < opt.grid; ++i) {
-        const double x = opt.grid > 1 ? lo + (hi - lo) * static_cast<double>(i) /
-                                                 static_cast<double>(opt.grid - 1)
-                                      : hi;
-        cand.push_back(s + x);
-      }
-      double cum = std::numeric_limits<double>::infinity();
-      for (std::size_t j = seg; j < joints.size(); ++j) {
-        const Joint& jt = joints[j];
-        if (jt.s <= s) continue;
-        if (jt.s > s + hi) break;
-        if (jt.s >= s + lo - kWindow) {
-          cand.push_back(jt.s);
-          cand.push_back(jt.s - kWindow);
-        }
-        cum = std::min(cum, jt.cap);
-        if (s + cum >= jt.s) cand.push_back(s + std::min(cum, hi));
-        if (jt.stop) break;
-      }
-      std::sort(cand.begin(), cand.end());
-      cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
-      evals.clear();
-      for (const double s2 : cand) {
-        const double d2 = s2 - s;
-        // Rounding: s + x − s differs from x by some ulps of s (1e-13 mm at 500 mm).
-        if (d2 < lo - kRound || d2 > hi + kRound) continue;
-        Eval e{s2, seg, 0};
-        if (pb.step_ok(s, seg, s2, e.seg2))
-          e.ok = pb.dynamics_ok(p0, p1, pb.point(s2, e.seg2)) ? 1 : -1;
-        evals.push_back(e);
-      }
-      // Boundaries of the dynamic rules: bisect between a feasible candidate and an adjacent one
-      // that only the dynamic rules reject.
-      const std::size_t ne = evals.size();
-      for (std::size_t i = 0; i + 1 < ne; ++i) {
-        for (int dir = 0; dir < 2; ++dir) {
-          const Eval& good = evals[dir == 0 ? i : i + 1];
-          const Eval& bad = evals[dir == 0 ? i + 1 : i];
-          if (good.ok != 1 || bad.ok != -1) continue;
-          double g = good.s2, b = bad.s2;
-          std::size_t gseg = good.seg2;
-          for (int it = 0; it < opt.bisect; ++it) {
-            const double mid = 0.5 * (g + b);
-            std::size_t mseg = 0;
-            if (pb.step_ok(s, seg, mid, mseg) && pb.dynamics_ok(p0, p1, pb.point(mid, mseg))) {
-              g = mid;
-              gseg = mseg;
-            } else {
-              b = mid;
-            }
-          }
-          if (g != good.s2) evals.push_back({g, gseg, 1});
-        }
-      }
+      const double s = nd.s;
+      ex.expand(nd, evals);
       for (const Eval& e : evals) {
-        if (e.ok != 1) continue;
         const double d2 = e.s2 - s;
         if (e.s2 == end) {
           if (d2 <= a) {
@@ -490,7 +548,27 @@ Result search(const Problem& pb, const Options& opt, bool verbose) {
       beam.push_back(n);
     }
     history.push_back(std::move(hist));
-    if (cycle % 64 == 0) compact(history);
+    if (cycle % 64 == 0) {
+      compact(history);
+      if (opt.certify) {
+        // Cycles whose history holds one state are committed: every live state descends from it.
+        std::vector<Eval> scratch;
+        std::size_t c = res.committed + 1;
+        for (; c < history.size() && history[c].size() == 1; ++c) {
+          Node st{history[c - 1][0].s, history[c][0].s, 0, -1};
+          st.seg = static_cast<std::uint32_t>(pb.seg_of(st.s, 0));
+          const std::size_t k = brake_to_rest(ex, pb, st, scratch);
+          if (k > 0) {
+            ++res.certified;
+            res.longest_brake = std::max(res.longest_brake, k);
+          } else if (res.first_uncertified == 0) {
+            res.first_uncertified = c;
+          }
+        }
+        res.committed = c - 1;
+        res.longest_lag = std::max(res.longest_lag, cycle - res.committed);
+      }
+    }
     res.max_beam = std::max(res.max_beam, beam.size());
     if (cycle >= opt.trace_from && cycle < opt.trace_to) {
       // Diagnostics: the beam's spread of positions and steps, and the guide's drops.
@@ -542,6 +620,8 @@ int run(int argc, char** argv) {
                  "joints ahead of each state checked by the backward guide (0: no guide)");
   app.add_option("--trace", opt.trace_from, "first cycle with a diagnostic line on stderr");
   app.add_option("--trace-to", opt.trace_to, "end of the traced cycles (exclusive)");
+  app.add_flag("--certify", opt.certify,
+               "bring every committed state to rest by a greedy brake and count the failures");
   app.add_flag("-v,--verbose", verbose, "progress every 1000 cycles on stderr");
   try {
     app.parse(argc, argv);
@@ -592,6 +672,10 @@ int run(int argc, char** argv) {
         cycles, t, bound, bound > 0 ? t / bound : 0.0, pb.segments(), pb.length(), opt.per_bin,
         opt.bins_per_a, opt.grid, opt.factor, res.max_beam, res.expanded, secs,
         static_cast<double>(res.expanded) * per_cycle, 1e6 * secs * per_cycle);
+    if (opt.certify)
+      std::printf(
+          "committed=%zu certified=%zu longest_brake=%zu longest_lag=%zu first_uncertified=%zu\n",
+          res.committed, res.certified, res.longest_brake, res.longest_lag, res.first_uncertified);
     return 0;
   } catch (const cncore::InputError& e) {
     std::fprintf(stderr, "%s\n", e.formatted().c_str());
