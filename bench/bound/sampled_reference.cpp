@@ -1,7 +1,7 @@
 // cncore-sref: an achievable sampled reference trajectory, searched cycle by cycle.
 //   cncore-sref PROGRAM.ngc -o TRAJ.csv [--machine FILE.toml] [--per-bin K] [--bins-per-a B]
 //               [--grid G] [--limit-factor M] [--bisect N] [--guide-joints J] [-v]
-//               [--trace FROM --trace-to TO] [--certify]
+//               [--trace FROM --trace-to TO] [--certify] [--max-lag L] [--recover]
 // Prints one line "cycles=… time_s=… bound_s=… ratio=… …" (ratio: time over cncore-bound's
 // bound); with --certify a second one (below). The trajectory has one row per cycle from the start
 // (t = 0) to the arrival on the end point (no trailing rest sample). Check it with
@@ -59,6 +59,11 @@
 // feasible step every cycle) until the tool rests; a state that comes to rest so has a safe
 // continuation whatever the search finds later. The line reports how many committed states came
 // to rest, the longest such brake and the longest lag of the commits behind the search's front.
+// --max-lag L forces a commit once the commits lag the front by more than L cycles (checked every
+// 64): the beam keeps only the states that share, L/2 cycles back, the ancestor of the farthest
+// state whose ancestor there brakes to rest (with --certify). --recover meets a death (no state
+// can continue) as a planner would: from the newest committed state that braked to rest, brake
+// to rest again and search on from rest.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -101,6 +106,8 @@ struct Options {
   std::size_t guide_joints = 16;             // joints ahead checked by the backward guide
   std::size_t trace_from = 0, trace_to = 0;  // cycles with a diagnostic line on stderr
   bool certify = false;                      // brake every committed state to rest (greedy)
+  std::size_t max_lag = 0;                   // force a commit when the lag exceeds this (0: never)
+  bool recover = false;  // on a death, brake to rest from the newest committed state, restart
 };
 
 // Every limit as a length per cycle (mm per τ or per τ²), already scaled by M.
@@ -434,12 +441,16 @@ struct Result {
   // brought to rest, its longest brake in cycles, and the longest commit lag behind the front.
   std::size_t committed = 0, certified = 0, longest_brake = 0, longest_lag = 0;
   std::size_t first_uncertified = 0;  // cycle of the first state the greedy brake lost (0: none)
+  std::size_t forced = 0;             // --max-lag: states dropped to force a commit
+  std::size_t recoveries = 0;         // --recover: deaths met by braking to rest
+  std::size_t last_certified = 0;     // newest committed cycle whose state braked to rest
 };
 
 // Greedy bail-out: from a state, take the smallest feasible step every cycle until the tool
 // rests (step 0, or the end point reached as the checker's stop). A state it brings to rest has
 // a safe continuation whatever the search does next. Returns the cycles taken, 0 if it fails.
-std::size_t brake_to_rest(Expander& ex, const Problem& pb, Node n, std::vector<Eval>& evals) {
+std::size_t brake_to_rest(Expander& ex, const Problem& pb, Node n, std::vector<Eval>& evals,
+                          std::vector<Node>* path = nullptr) {
   const double a = pb.rules().a;
   for (std::size_t k = 1; k < 100000; ++k) {
     ex.expand(n, evals);
@@ -448,8 +459,9 @@ std::size_t brake_to_rest(Expander& ex, const Problem& pb, Node n, std::vector<E
       if (!best || e.s2 < best->s2) best = &e;
     if (!best) return 0;
     const double d2 = best->s2 - n.s;
-    if (d2 == 0 || (best->s2 == pb.length() && d2 <= a)) return k;
     n = {n.s, best->s2, static_cast<std::uint32_t>(best->seg2), -1};
+    if (path) path->push_back(n);
+    if (d2 == 0 || (best->s2 == pb.length() && d2 <= a)) return k;
   }
   return 0;
 }
@@ -468,6 +480,7 @@ Result search(const Problem& pb, const Options& opt, bool verbose) {
   std::vector<Eval> evals;
   std::vector<std::uint32_t> order;
   Result res;
+  std::size_t commit_seg = 0;  // segment of the last committed sample (seg_of's hint)
   const auto t0 = std::chrono::steady_clock::now();
 
   for (std::size_t cycle = 1;; ++cycle) {
@@ -508,6 +521,32 @@ Result search(const Problem& pb, const Options& opt, bool verbose) {
         p = h.parent;
       }
       return res;
+    }
+    if (children.empty() && opt.recover && res.last_certified > 0) {
+      // Recovery, as a planner ahead of the tool would do it: the tool has at most reached the
+      // newest committed state that brakes to rest (--certify); from there it brakes to rest
+      // greedily, and the search starts again from rest.
+      const std::size_t c = res.last_certified;
+      history.resize(c + 1);
+      Node st{history[c - 1][0].s, history[c][0].s, 0, -1};
+      st.seg = static_cast<std::uint32_t>(pb.seg_of(st.s, pb.seg_of(st.sp, 0)));
+      std::vector<Node> path;
+      std::vector<Eval> scratch;
+      if (brake_to_rest(ex, pb, st, scratch, &path) == 0)
+        throw std::runtime_error("beam died at cycle " + std::to_string(cycle) +
+                                 " and its certified state did not brake to rest again");
+      for (const Node& n : path) history.push_back({{n.s, 0}});
+      ++res.recoveries;
+      res.committed = res.last_certified = history.size() - 1;
+      const Node& last = path.back();
+      if (last.s == end) {
+        res.s.resize(history.size());
+        for (std::size_t k = 0; k < history.size(); ++k) res.s[k] = history[k][0].s;
+        return res;
+      }
+      beam.assign(1, {last.s, last.s, last.seg, 0});
+      cycle = history.size() - 1;
+      continue;
     }
     if (children.empty())
       throw std::runtime_error("beam died at cycle " + std::to_string(cycle) +
@@ -550,24 +589,67 @@ Result search(const Problem& pb, const Options& opt, bool verbose) {
     history.push_back(std::move(hist));
     if (cycle % 64 == 0) {
       compact(history);
-      if (opt.certify) {
-        // Cycles whose history holds one state are committed: every live state descends from it.
-        std::vector<Eval> scratch;
-        std::size_t c = res.committed + 1;
-        for (; c < history.size() && history[c].size() == 1; ++c) {
-          Node st{history[c - 1][0].s, history[c][0].s, 0, -1};
-          st.seg = static_cast<std::uint32_t>(pb.seg_of(st.s, 0));
-          const std::size_t k = brake_to_rest(ex, pb, st, scratch);
-          if (k > 0) {
-            ++res.certified;
-            res.longest_brake = std::max(res.longest_brake, k);
-          } else if (res.first_uncertified == 0) {
-            res.first_uncertified = c;
+      if (opt.max_lag > 0 && cycle - res.committed > opt.max_lag) {
+        // Forced commit: keep only the states that share the farthest state's ancestor
+        // max_lag/2 cycles back (the beam is the history's last cycle, index for index).
+        const std::size_t c0 = cycle - opt.max_lag / 2;
+        auto ancestor = [&](std::size_t i) {
+          for (std::size_t c = history.size() - 1; c > c0; --c)
+            i = static_cast<std::size_t>(history[c][i].parent);
+          return i;
+        };
+        // The farthest state whose ancestor there brakes to rest (with --certify; else the
+        // farthest).
+        std::vector<std::size_t> by_s(beam.size());
+        std::iota(by_s.begin(), by_s.end(), std::size_t{0});
+        std::sort(by_s.begin(), by_s.end(),
+                  [&](std::size_t x, std::size_t y) { return beam[x].s > beam[y].s; });
+        std::size_t target = ancestor(by_s[0]);
+        if (opt.certify) {
+          std::vector<Eval> scratch;
+          for (const std::size_t i : by_s) {
+            const std::size_t t = ancestor(i);
+            const auto tp = static_cast<std::size_t>(history[c0][t].parent);
+            Node st{history[c0 - 1][tp].s, history[c0][t].s, 0, -1};
+            st.seg = static_cast<std::uint32_t>(pb.seg_of(st.s, commit_seg));
+            if (brake_to_rest(ex, pb, st, scratch) > 0) {
+              target = t;
+              break;
+            }
           }
         }
-        res.committed = c - 1;
-        res.longest_lag = std::max(res.longest_lag, cycle - res.committed);
+        std::vector<Node> kept_beam;
+        std::vector<Hist> kept_hist;
+        for (std::size_t i = 0; i < beam.size(); ++i) {
+          if (ancestor(i) != target) continue;
+          kept_hist.push_back(history.back()[i]);
+          kept_beam.push_back(beam[i]);
+          kept_beam.back().parent = static_cast<std::int32_t>(kept_hist.size() - 1);
+        }
+        res.forced += beam.size() - kept_beam.size();
+        beam = std::move(kept_beam);
+        history.back() = std::move(kept_hist);
+        compact(history);
       }
+      // Cycles whose history holds one state are committed: every live state descends from it.
+      std::vector<Eval> scratch;
+      std::size_t c = res.committed + 1;
+      for (; c < history.size() && history[c].size() == 1; ++c) {
+        if (!opt.certify) continue;
+        Node st{history[c - 1][0].s, history[c][0].s, 0, -1};
+        commit_seg = pb.seg_of(st.s, commit_seg);
+        st.seg = static_cast<std::uint32_t>(commit_seg);
+        const std::size_t k = brake_to_rest(ex, pb, st, scratch);
+        if (k > 0) {
+          ++res.certified;
+          res.last_certified = c;
+          res.longest_brake = std::max(res.longest_brake, k);
+        } else if (res.first_uncertified == 0) {
+          res.first_uncertified = c;
+        }
+      }
+      res.committed = c - 1;
+      res.longest_lag = std::max(res.longest_lag, cycle - res.committed);
     }
     res.max_beam = std::max(res.max_beam, beam.size());
     if (cycle >= opt.trace_from && cycle < opt.trace_to) {
@@ -622,6 +704,12 @@ int run(int argc, char** argv) {
   app.add_option("--trace-to", opt.trace_to, "end of the traced cycles (exclusive)");
   app.add_flag("--certify", opt.certify,
                "bring every committed state to rest by a greedy brake and count the failures");
+  app.add_option("--max-lag", opt.max_lag,
+                 "commit by force (keep the farthest state's lineage) once the commits lag the "
+                 "front by more than this many cycles (checked every 64 cycles; 0: never)");
+  app.add_flag("--recover", opt.recover,
+               "when no state can continue, brake to rest from the newest committed state that "
+               "--certify brought to rest and search again from rest (instead of failing)");
   app.add_flag("-v,--verbose", verbose, "progress every 1000 cycles on stderr");
   try {
     app.parse(argc, argv);
@@ -672,10 +760,12 @@ int run(int argc, char** argv) {
         cycles, t, bound, bound > 0 ? t / bound : 0.0, pb.segments(), pb.length(), opt.per_bin,
         opt.bins_per_a, opt.grid, opt.factor, res.max_beam, res.expanded, secs,
         static_cast<double>(res.expanded) * per_cycle, 1e6 * secs * per_cycle);
-    if (opt.certify)
+    if (opt.certify || opt.max_lag > 0 || opt.recover)
       std::printf(
-          "committed=%zu certified=%zu longest_brake=%zu longest_lag=%zu first_uncertified=%zu\n",
-          res.committed, res.certified, res.longest_brake, res.longest_lag, res.first_uncertified);
+          "committed=%zu certified=%zu longest_brake=%zu longest_lag=%zu first_uncertified=%zu "
+          "forced_drops=%zu recoveries=%zu\n",
+          res.committed, res.certified, res.longest_brake, res.longest_lag, res.first_uncertified,
+          res.forced, res.recoveries);
     return 0;
   } catch (const cncore::InputError& e) {
     std::fprintf(stderr, "%s\n", e.formatted().c_str());
