@@ -3,11 +3,11 @@
 //               [--grid G] [--limit-factor M] [--bisect N] [--guide-joints J] [-v]
 //               [--trace FROM --trace-to TO] [--certify] [--max-lag L] [--recover]
 // Prints one line "cycles=… time_s=… bound_s=… ratio=… …" (ratio: time over cncore-bound's
-// bound); with --certify a second one (below). The trajectory has one row per cycle from the start
-// (t = 0) to the arrival on the end point (no trailing rest sample). Check it with
-// `cncore-trajcheck PROGRAM TRAJ.csv`. Typical cost: K=8, B=4, G=9 takes 5 s on a 10 000-segment,
-// 11 000-cycle program; the time grows about linearly with K·B and with G. Memory stays small (dead
-// lineages are dropped).
+// bound); with --certify, --max-lag or --recover a second one (below). The trajectory has one row
+// per cycle from the start (t = 0) to the arrival on the end point (no trailing rest sample). Check
+// it with `cncore-trajcheck PROGRAM TRAJ.csv`. Typical cost: K=8, B=4, G=9 takes 5 s on a 10
+// 000-segment, 11 000-cycle program; the time grows about linearly with K·B and with G. Memory
+// stays small (dead lineages are dropped).
 //
 // Why: the continuous time-optimal bound (cncore-bound) passes every corner in zero time at
 // Vg = Amax·τ/(2 sin(θ/2)). A sampled trajectory is judged differently by the checker

@@ -67,9 +67,6 @@ class LineMerger {
   static constexpr double kShortLineMm = 1.0;
 
  private:
-  // The directions from the line's start that pass within the tolerance of every inner vertex
-  // (a cone inside their intersection; the whole sphere before the first), and the distance
-  // of the last inner vertex from the start.
   // An angle as its cosine and sine (the cone test needs no trigonometric call, line_merge.cpp).
   struct Angle {
     double c = 1, s = 0;
@@ -89,12 +86,15 @@ class LineMerger {
       return {x.c * y.c + x.s * y.s, x.s * y.c - x.c * y.s};
     }
   };
+  // The directions from the line's start that pass within the tolerance of every inner vertex
+  // (a cone inside their intersection; the whole sphere before the first), and the distance
+  // of the last inner vertex from the start.
   struct Cone {
     Vec3 axis{1, 0, 0};
     Angle half{-1, 0};  // π: every direction
     double r_mm = 0;
   };
-  static bool within(const Angle& x, const Angle& y);
+  static bool within(const Angle& x, const Angle& y);  // x ≤ y (see line_merge.cpp)
   bool extends(const Block& b, Cone& cone) const;
   void emit(const Block& b);
 
