@@ -489,6 +489,49 @@ TEST(TrajectoryChecker, ReversalPassedAtVIsMeasuredAtVNotTwice) {
   EXPECT_GT(rep_fast.count(Property::kJointSpeed), 0u) << rep_fast.summary();
 }
 
+// Up Z to 1 and back to 0 in steps of v, the set-points turning `short_mm` before the fold; with
+// `ramp` they slow by v/4 per cycle to the turn and rise again the same way, else they reverse
+// at once.
+Trajectory turned_short(double v_mm, double short_mm, bool ramp) {
+  const std::vector<double> fractions =
+      ramp ? std::vector<double>{0.75, 0.5, 0.25} : std::vector<double>{};
+  double ramp_mm = 0;
+  for (const double f : fractions) ramp_mm += f * v_mm;
+  std::vector<double> z{0};
+  while (z.back() + v_mm <= 1 - short_mm - ramp_mm + 1e-12) z.push_back(z.back() + v_mm);
+  for (const double f : fractions) z.push_back(z.back() + f * v_mm);
+  for (auto f = fractions.rbegin(); f != fractions.rend(); ++f) z.push_back(z.back() - *f * v_mm);
+  while (z.back() - v_mm > 1e-12) z.push_back(z.back() - v_mm);
+  z.push_back(0);
+  Trajectory tr;
+  for (std::size_t k = 0; k < z.size(); ++k)
+    tr.add(static_cast<double>(k) * kTau, 1, P(0, 0, z[k]));
+  return tr;
+}
+
+TEST(TrajectoryChecker, FilteredReversalTurnedShortOfItsTipIsMeasuredByItsChords) {
+  // The post filter averages the set-points, so at a reversal they turn before the tip (stress_test
+  // lines 203-204: at X 0.998 of a fold at 1.000), on the path but past none of it. Their progress
+  // along the path jumps over the tip (2·2 µm in one cycle, once reported as 4 mm/s on a 1 mm/s
+  // joint and 3 750 mm/s² tangential); what the servos follow is the chord.
+  const std::vector<Block> blocks = {line(P(0, 0, 0), P(0, 0, 1), 60, 1),
+                                     line(P(0, 0, 1), P(0, 0, 0), 60, 2)};
+  Limits filtered;
+  filtered.post_filter_s = 0.008;
+  filtered.path_tolerance_mm = 0.01;  // the contour tolerance
+  const auto rep = check_trajectory(turned_short(0.001, 0.0025, true), blocks, filtered);
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+  EXPECT_NEAR(rep.max_speed_mm_s, 1.0, 1e-6) << rep.summary();
+
+  // Unfiltered, the same set-points skip 2.5 µm of the path at the fold: charged.
+  EXPECT_FALSE(check_trajectory(turned_short(0.001, 0.0025, true), blocks, Limits{}).ok());
+  // Filtered, reversing at once at 4 mm/s on the 1 mm/s fold is still charged: the crossing
+  // step's chord and the turn's 8 µm per cycle².
+  const auto fast = check_trajectory(turned_short(0.004, 0.0025, false), blocks, filtered);
+  EXPECT_GT(fast.count(Property::kJointSpeed), 0u) << fast.summary();
+  EXPECT_GT(fast.count(Property::kNormalAccel), 0u) << fast.summary();
+}
+
 TEST(TrajectoryChecker, ArrivalAtASlowBlockIsChargedToTheBlockItCameBy) {
   // G0 to an exact stop at X10, then G1 F5: the last cycle of the G0 lands on the G1's start at
   // 0.5 mm/s (Amax·τ/2 with 1000 mm/s²). That cycle moved on the G0; once on the G1 the speed
