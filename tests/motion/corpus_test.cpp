@@ -45,7 +45,8 @@ struct KnownViolation {
 struct CorpusProgram {
   const char* file;
   // Stop mode stops at every block end; the two programs of ~6 M cycles (20–26 s each in stop
-  // mode on this machine) run in look-ahead mode only, to keep the corpus run small.
+  // mode on this machine) run in look-ahead mode only (and without the post filter), to keep the
+  // corpus run small.
   bool stop_mode = true;
   KnownViolation lookahead{};
   KnownViolation stop{};
@@ -103,11 +104,13 @@ struct Case {
   Mode mode = Mode::kLookahead;
   AccDecType accdec = AccDecType::kMovingAverage;  // look-ahead's acc/dec type (issue 9)
   bool jerk = false;  // acceleration type with a jerk stage of T2 = 4 cycles (Jmax 10⁶ mm/s³)
+  bool post_filter = false;  // acceleration type with an 8-cycle post-interpolation filter
 };
 
 const char* case_suffix(const Case& c) {
   if (c.mode == Mode::kStop) return "stop";
   if (c.jerk) return "acceleration+jerk";
+  if (c.post_filter) return "acceleration+post-filter";
   return c.accdec == AccDecType::kAcceleration ? "acceleration" : "lookahead";
 }
 
@@ -124,6 +127,10 @@ std::vector<Case> all_cases() {
     out.push_back({p, Mode::kLookahead, AccDecType::kAcceleration});
     // The jerk stage widens every cap and zone (accel_limited.cpp, 8.): real programs with it.
     out.push_back({p, Mode::kLookahead, AccDecType::kAcceleration, true});
+    // The post filter rounds corners within the contour tolerance and turns reversals short of
+    // their tips (the checker measures its set-points by their chords). Not on the two
+    // programs of ~6 M cycles (15 s each).
+    if (p.stop_mode) out.push_back({p, Mode::kLookahead, AccDecType::kAcceleration, false, true});
     if (p.stop_mode) out.push_back({p, Mode::kStop});
   }
   return out;
@@ -167,7 +174,8 @@ TEST_P(CorpusRun, KeepsP1ToP4) {
                                 : c.accdec == AccDecType::kMovingAverage ? c.program.lookahead
                                                                          : c.program.acceleration;
   MachineConfig machine = default_machine_config();
-  if (c.jerk) machine.max_jerk_mm_s3 = 1e6;  // T2 = ⌈2·Amax/(Jmax·τ)⌉ = 4 cycles
+  if (c.jerk) machine.max_jerk_mm_s3 = 1e6;          // T2 = ⌈2·Amax/(Jmax·τ)⌉ = 4 cycles
+  if (c.post_filter) machine.post_filter_s = 0.008;  // Tp = 8 cycles
   sim::RunOptions options;
   options.kernel.mode = c.mode;
   options.kernel.accdec = c.accdec;
@@ -218,6 +226,7 @@ std::string case_name(const ::testing::TestParamInfo<Case>& info) {
   }
   if (info.param.mode == Mode::kStop) return n + "_Stop";
   if (info.param.jerk) return n + "_AccelerationJerk";
+  if (info.param.post_filter) return n + "_AccelerationPostFilter";
   return n + (info.param.accdec == AccDecType::kAcceleration ? "_Acceleration" : "_Lookahead");
 }
 
