@@ -2,6 +2,7 @@
 //   cncore-sref PROGRAM.ngc -o TRAJ.csv [--machine FILE.toml] [--per-bin K] [--bins-per-a B]
 //               [--grid G] [--limit-factor M] [--bisect N] [--guide-joints J] [-v]
 //               [--trace FROM --trace-to TO] [--certify] [--max-lag L] [--recover]
+//               [--seed-trajectory T.csv]
 // Prints one line "cycles=… time_s=… bound_s=… ratio=… …" (ratio: time over cncore-bound's
 // bound); with --certify, --max-lag or --recover a second one (below). The trajectory has one row
 // per cycle from the start (t = 0) to the arrival on the end point (no trailing rest sample). Check
@@ -64,6 +65,10 @@
 // state whose ancestor there brakes to rest (with --certify). --recover meets a death (no state
 // can continue) as a planner would: from the newest committed state that braked to rest, brake
 // to rest again and search on from rest.
+// --seed-trajectory T keeps the samples of T (e.g. the kernel's, without its merge stage) in the
+// beam as one lineage, whatever the selection says: the result is never slower than T, and the
+// search can leave T wherever it finds better (ends with --max-lag's forced commits and with a
+// recovery).
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -84,6 +89,7 @@
 #include "limits.hpp"
 #include "path_geometry.hpp"
 #include "program_blocks.hpp"
+#include "trajectory.hpp"
 
 namespace {
 
@@ -466,7 +472,10 @@ std::size_t brake_to_rest(Expander& ex, const Problem& pb, Node n, std::vector<E
   return 0;
 }
 
-Result search(const Problem& pb, const Options& opt, bool verbose) {
+// seed: arc lengths of a trajectory that keeps the rules (the kernel's, --seed-trajectory), kept
+// in the beam as one lineage whatever the selection says; nullptr or empty: none.
+Result search(const Problem& pb, const Options& opt, bool verbose,
+              const std::vector<double>* seed) {
   const Rules& r = pb.rules();
   const double a = r.a;
   const double bin_w = a / opt.bins_per_a;
@@ -481,6 +490,8 @@ Result search(const Problem& pb, const Options& opt, bool verbose) {
   std::vector<std::uint32_t> order;
   Result res;
   std::size_t commit_seg = 0;  // segment of the last committed sample (seg_of's hint)
+  bool seed_on = seed != nullptr && seed->size() > 1;
+  std::size_t seed_idx = 0, seed_seg = 0;  // the seed's state in the beam, its segment
   const auto t0 = std::chrono::steady_clock::now();
 
   for (std::size_t cycle = 1;; ++cycle) {
@@ -508,6 +519,17 @@ Result search(const Problem& pb, const Options& opt, bool verbose) {
         }
         children.push_back({s, e.s2, static_cast<std::uint32_t>(e.seg2), parent_of(bi)});
       }
+    }
+    std::size_t seed_child = children.size();  // none
+    if (seed_on && done < 0 && cycle < seed->size()) {
+      const double s_seed = (*seed)[cycle];
+      seed_seg = pb.seg_of(s_seed, seed_seg);
+      children.push_back({(*seed)[cycle - 1], s_seed, static_cast<std::uint32_t>(seed_seg),
+                          static_cast<std::int32_t>(seed_idx)});
+      seed_child = children.size() - 1;
+      if (s_seed == end) done = static_cast<std::int32_t>(seed_child);
+    } else if (seed_on && done < 0) {
+      seed_on = false;  // the seed ended without reaching the end point
     }
     res.expanded += beam.size();
     if (done >= 0) {
@@ -537,6 +559,7 @@ Result search(const Problem& pb, const Options& opt, bool verbose) {
                                  " and its certified state did not brake to rest again");
       for (const Node& n : path) history.push_back({{n.s, 0}});
       ++res.recoveries;
+      seed_on = false;
       res.committed = res.last_certified = history.size() - 1;
       const Node& last = path.back();
       if (last.s == end) {
@@ -568,6 +591,13 @@ Result search(const Problem& pb, const Options& opt, bool verbose) {
     beam.clear();
     std::vector<Hist> hist;
     std::size_t cur_bin = nbins, kept = 0;
+    bool seed_kept = false;
+    auto keep = [&](const Node& c) {
+      hist.push_back({c.s, c.parent});
+      Node n = c;
+      n.parent = static_cast<std::int32_t>(hist.size() - 1);
+      beam.push_back(n);
+    };
     for (const std::uint32_t ci : order) {
       const Node& c = children[ci];
       const std::size_t bc = bin(c);
@@ -581,10 +611,15 @@ Result search(const Problem& pb, const Options& opt, bool verbose) {
         if (std::abs(last.s - c.s) < 1e-12 && std::abs(last.sp - c.sp) < 1e-12) continue;
       }
       ++kept;
-      hist.push_back({c.s, c.parent});
-      Node n = c;
-      n.parent = static_cast<std::int32_t>(hist.size() - 1);
-      beam.push_back(n);
+      if (ci == seed_child) {
+        seed_kept = true;
+        seed_idx = beam.size();
+      }
+      keep(c);
+    }
+    if (seed_on && seed_child < children.size() && !seed_kept) {
+      seed_idx = beam.size();
+      keep(children[seed_child]);
     }
     history.push_back(std::move(hist));
     if (cycle % 64 == 0) {
@@ -627,6 +662,7 @@ Result search(const Problem& pb, const Options& opt, bool verbose) {
           kept_beam.back().parent = static_cast<std::int32_t>(kept_hist.size() - 1);
         }
         res.forced += beam.size() - kept_beam.size();
+        seed_on = false;  // (the seed's lineage may be gone)
         beam = std::move(kept_beam);
         history.back() = std::move(kept_hist);
         compact(history);
@@ -680,9 +716,59 @@ Result search(const Problem& pb, const Options& opt, bool verbose) {
   }
 }
 
+// Arc length of every sample of a trajectory on the path: its projection, walking forward from
+// the last one (the first segment within 2 nm: the CSV's 6 decimals). The samples must lie on
+// the programmed pieces, so run the kernel without the merge stage ([motion]
+// merge_tolerance_mm = 0: merged lines are up to 0.5 µm off the pieces, and re-projected they
+// break the rules). A sample past a fold (a reversal) that lands beyond the one before is read
+// on the way in: such programs are not supported. Samples after the end point are dropped.
+std::vector<double> seed_positions(const Path& path, const cncore::testing::Trajectory& tr) {
+  std::vector<double> s;
+  std::size_t j = 0;
+  double u = 0;
+  for (const AxisVec& p : tr.pos) {
+    bool hit = false;
+    for (std::size_t jj = j; jj < path.segments.size() && jj < j + 4096; ++jj) {
+      double d = 0;
+      const double uu = path.segments[jj].project(p, jj == j ? u : 0.0, d);
+      if (d <= 2e-6) {
+        j = jj;
+        u = uu;
+        hit = true;
+        break;
+      }
+    }
+    if (!hit) {
+      double best = 1e9;
+      std::size_t bj = 0;
+      for (std::size_t jj = 0; jj < path.segments.size(); ++jj) {
+        double d = 0;
+        path.segments[jj].project(p, 0.0, d);
+        if (d < best) {
+          best = d;
+          bj = jj;
+        }
+      }
+      throw std::runtime_error("seed sample " + std::to_string(s.size()) +
+                               " is off the path (from segment " + std::to_string(j) + " u " +
+                               std::to_string(u) + "; nearest segment " + std::to_string(bj) +
+                               " at " + std::to_string(best * 1e3) + " um)");
+    }
+    const auto& sg = path.segments[j];
+    s.push_back(j + 1 == path.segments.size() && u >= 1 ? path.length_mm
+                                                        : sg.s0_mm + u * sg.length_mm);
+    if (s.back() >= path.length_mm - 1e-5) {  // arrived (up to the CSV rounding)
+      s.back() = path.length_mm;
+      break;
+    }
+  }
+  for (std::size_t k = 1; k < s.size(); ++k) s[k] = std::max(s[k], s[k - 1]);
+  return s;
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"Search for a sampled trajectory with few cycles that passes the checker"};
-  std::string program, machine_file, out;
+  std::string program, machine_file, out, seed_file;
   Options opt;
   bool verbose = false;
   app.add_option("program", program, "part program (G-code)")->required();
@@ -710,6 +796,9 @@ int run(int argc, char** argv) {
   app.add_flag("--recover", opt.recover,
                "when no state can continue, brake to rest from the newest committed state that "
                "--certify brought to rest and search again from rest (instead of failing)");
+  app.add_option("--seed-trajectory", seed_file,
+                 "a trajectory CSV that keeps the rules (e.g. `cncore run --trajectory`): its "
+                 "samples stay in the beam as one lineage, so the result is never slower");
   app.add_flag("-v,--verbose", verbose, "progress every 1000 cycles on stderr");
   try {
     app.parse(argc, argv);
@@ -724,7 +813,10 @@ int run(int argc, char** argv) {
     if (path.empty()) throw std::runtime_error("no motion");
     const Problem pb(path, lim, opt);
     const auto t0 = std::chrono::steady_clock::now();
-    const Result res = search(pb, opt, verbose);
+    std::vector<double> seed;
+    if (!seed_file.empty())
+      seed = seed_positions(path, cncore::testing::load_trajectory_csv(seed_file));
+    const Result res = search(pb, opt, verbose, &seed);
     const double secs =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
