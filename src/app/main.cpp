@@ -75,6 +75,14 @@ int main_cli(int argc, char** argv) {
                   "Override steps TIME:PCT[,TIME:PCT...] (time in s, override in %)")
       ->allow_extra_args(false)
       ->type_name("T:PCT[,T:PCT...]");
+  run->add_option("--dry-run", ra.dry_run_feed_mm_min,
+                  "Dry run: every feed move (G1 G2 G3) at this feed instead of its F, mm/min "
+                  "(rapids at the rapid rate; override and limits apply)")
+      ->type_name("FEED");
+  run->add_option("--single-block", ra.single_block_wait_s,
+                  "Single-block stop: stop at the end of every motion block and wait this long "
+                  "before the next (the operator's cycle start; 0: at once), s")
+      ->type_name("WAIT_S");
   run->add_option("--var", ra.vars, "Named parameter #<NAME> = VALUE (NAME=VALUE, repeatable)")
       ->allow_extra_args(false)
       ->type_name("NAME=V");

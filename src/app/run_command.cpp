@@ -3,6 +3,7 @@
 // trajectory, summary, report and height-map outputs.
 #include <fmt/format.h>
 
+#include <cmath>
 #include <iostream>
 #include <optional>
 #include <string>
@@ -102,6 +103,17 @@ int command_run(const RunArgs& a) {
     }
   }
   options.interpreter = interpreter_options(a.vars, a.params);
+  if (a.dry_run_feed_mm_min) {
+    if (!(*a.dry_run_feed_mm_min > 0) || !std::isfinite(*a.dry_run_feed_mm_min))
+      throw UsageError("--dry-run: the feed must be a number > 0 (mm/min)");
+    options.operator_modes.dry_run_feed_mm_min = *a.dry_run_feed_mm_min;
+  }
+  if (a.single_block_wait_s) {
+    if (!(*a.single_block_wait_s >= 0) || !std::isfinite(*a.single_block_wait_s))
+      throw UsageError("--single-block: the wait must be a number >= 0 (s)");
+    options.operator_modes.single_block = true;
+    options.operator_modes.single_block_wait_s = *a.single_block_wait_s;
+  }
   require_readable(a.program);
 
   // Adaptive feed control (spec 04): runs in the loop when there is a load source.
@@ -179,6 +191,7 @@ int command_run(const RunArgs& a) {
                              options.kernel.accdec == motion::AccDecType::kMovingAverage
                          ? "moving_average"
                          : "acceleration");
+  summary.set_operator_modes(options.operator_modes);
   ProgressObserver progress;
   std::vector<sim::SampleObserver*> observers{&summary};
   if (progress.enabled()) observers.push_back(&progress);  // else one virtual call per cycle less

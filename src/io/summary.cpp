@@ -422,6 +422,9 @@ std::string summary_to_json(const Summary& s, const MachineConfig& machine) {
   }
   j["mode"] = s.mode;
   if (!s.accdec.empty()) j["accdec"] = s.accdec;
+  if (s.operator_modes.dry_run_feed_mm_min > 0)
+    j["dry_run_feed_mm_min"] = s.operator_modes.dry_run_feed_mm_min;
+  if (s.operator_modes.single_block) j["single_block_wait_s"] = s.operator_modes.single_block_wait_s;
   j["cycles"] = s.cycles;
   j["period_s"] = machine.period_s;
   j["machine"] = machine.name;
@@ -478,7 +481,11 @@ std::string format_human_summary(const Summary& s, const MachineConfig& machine,
                                  const std::string& program) {
   std::string o;
   o += fmt::format("program       {}\n", program);
-  const std::string accdec = s.accdec.empty() ? "" : fmt::format(", {} acc/dec", s.accdec);
+  std::string accdec = s.accdec.empty() ? "" : fmt::format(", {} acc/dec", s.accdec);
+  if (s.operator_modes.dry_run_feed_mm_min > 0)
+    accdec += fmt::format(", dry run at {:.0f} mm/min", s.operator_modes.dry_run_feed_mm_min);
+  if (s.operator_modes.single_block)
+    accdec += fmt::format(", single block (wait {} s)", s.operator_modes.single_block_wait_s);
   o += fmt::format("machine       {} ({} mode{}, period {} ms)\n", machine.name, s.mode, accdec,
                    machine.period_s * 1000);
   o += fmt::format("cycle time    {:.3f} s ({} cycles)\n", s.cycle_time_s, s.cycles);

@@ -80,6 +80,7 @@ struct Summary {
   double time_without_correction_s = std::numeric_limits<double>::quiet_NaN();
   std::string mode;
   std::string accdec;  // look-ahead acc/dec type ("acceleration", "moving_average"); "" = n/a
+  sim::OperatorModes operator_modes;  // dry run, single-block stop (as the run had them)
   std::vector<std::string> warnings;
   std::vector<SlowSpot> slowest;                      // worst first, at most 5
   std::vector<AuxEvent> aux_events;                   // the first kMaxAuxEvents, in order
@@ -94,6 +95,7 @@ class SummaryObserver : public sim::SampleObserver {
   // Spec 03: the cycle time of the same program with the direction correction off.
   void set_time_without_correction_s(double t_s) { summary_.time_without_correction_s = t_s; }
   void set_accdec(std::string accdec) { summary_.accdec = std::move(accdec); }
+  void set_operator_modes(const sim::OperatorModes& m) { summary_.operator_modes = m; }
   // The motion blocks of the program (the kernel may get fewer: collinear pieces merged, or
   // more: arcs split by the direction correction).
   void set_program_blocks(std::uint64_t n) { summary_.blocks = n; }

@@ -53,8 +53,10 @@ struct alignas(64) Item {
 class BlockProducer {
  public:
   BlockProducer(const std::string& program_path, const MachineConfig& machine,
-                const interp::Options& options, const motion::KernelOptions& kernel)
-      : interpreter_(program_path, machine, options),
+                const interp::Options& options, const motion::KernelOptions& kernel,
+                const OperatorModes& modes)
+      : modes_(modes),
+        interpreter_(program_path, machine, options),
         corrector_(machine, program_path),
         merger_(make_line_merger(machine, kernel)) {}
 
@@ -88,16 +90,25 @@ class BlockProducer {
         merger_.put(corrected_);
         continue;
       }
+      if (wait_pending_) {  // single-block stop: the wait after the block just handed on
+        wait_pending_ = false;
+        corrector_.put(wait_);
+        continue;
+      }
       if (more_) more_ = interpreter_.next(source_);
       if (!more_) {
         merger_.finish();
         return merger_.next(block);
       }
       if (is_motion(source_)) ++motion_blocks_;
+      wait_pending_ = apply_operator_modes(modes_, source_, wait_);
       corrector_.put(source_);
     }
   }
 
+  OperatorModes modes_;
+  Block wait_;
+  bool wait_pending_ = false;
   interp::Interpreter interpreter_;
   feed::DirectionCorrector corrector_;
   planner::LineMerger merger_;
@@ -486,7 +497,8 @@ bool default_producer_thread() {
 RunCounts run_program(const std::string& program_path, const MachineConfig& machine,
                       const RunOptions& options, const std::vector<SampleObserver*>& observers) {
   // Constructed here, on the calling thread: a missing file throws before anything runs.
-  BlockProducer producer(program_path, machine, options.interpreter, options.kernel);
+  BlockProducer producer(program_path, machine, options.interpreter, options.kernel,
+                         options.operator_modes);
   if (!options.producer_thread) {
     InlineSource source(producer);
     return run_cycles(source, program_path, machine, options, observers);

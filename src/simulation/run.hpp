@@ -12,6 +12,7 @@
 #include "config/machine_config.hpp"
 #include "interpreter/interpreter.hpp"
 #include "motion/kernel.hpp"
+#include "simulation/operator_modes.hpp"
 
 namespace cncore::sim {
 
@@ -48,6 +49,7 @@ bool default_producer_thread();
 struct RunOptions {
   motion::KernelOptions kernel;
   interp::Options interpreter;
+  OperatorModes operator_modes;  // dry run, single-block stop
   // Feed-override steps (time in s, override in %), applied at the first cycle with t >= time.
   std::vector<std::pair<double, double>> override_steps;
   // When set, it decides the kernel's override every cycle; the override steps then only set

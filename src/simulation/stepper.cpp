@@ -10,8 +10,10 @@ namespace cncore::sim {
 
 ProgramStepper::ProgramStepper(const std::string& program_path, const MachineConfig& machine,
                                const motion::KernelOptions& kernel_options,
-                               const interp::Options& interpreter_options)
-    : interpreter_(program_path, machine, interpreter_options),
+                               const interp::Options& interpreter_options,
+                               const OperatorModes& modes)
+    : modes_(modes),
+      interpreter_(program_path, machine, interpreter_options),
       kernel_(machine, kernel_options),
       corrector_(std::make_unique<feed::DirectionCorrector>(machine, program_path)),
       merger_(make_line_merger(machine, kernel_options)) {}
@@ -25,11 +27,17 @@ bool ProgramStepper::produce(Block& block) {
       merger_.put(corrected_);
       continue;
     }
+    if (wait_pending_) {  // single-block stop: the wait after the block just handed on
+      wait_pending_ = false;
+      corrector_->put(wait_);
+      continue;
+    }
     if (!error_ && interpreter_.next(source_)) {
       if (source_.kind == BlockKind::kRapid || source_.kind == BlockKind::kLine ||
           source_.kind == BlockKind::kArc) {
         ++blocks_;
       }
+      wait_pending_ = apply_operator_modes(modes_, source_, wait_);
       corrector_->put(source_);
       continue;
     }

@@ -14,6 +14,7 @@
 #include "interpreter/interpreter.hpp"
 #include "motion/kernel.hpp"
 #include "planner/line_merge.hpp"
+#include "simulation/operator_modes.hpp"
 
 namespace cncore::feed {
 class DirectionCorrector;
@@ -35,7 +36,8 @@ class ProgramStepper {
  public:
   ProgramStepper(const std::string& program_path, const MachineConfig& machine,
                  const motion::KernelOptions& kernel_options,
-                 const interp::Options& interpreter_options = {});
+                 const interp::Options& interpreter_options = {},
+                 const OperatorModes& modes = {});
   ~ProgramStepper();
   ProgramStepper(const ProgramStepper&) = delete;
   ProgramStepper& operator=(const ProgramStepper&) = delete;
@@ -53,6 +55,9 @@ class ProgramStepper {
   // The next block for the kernel (false at the end of the program or after an error).
   bool produce(Block& block);
 
+  OperatorModes modes_;  // dry run, single-block stop
+  Block wait_;           // the wait a single-block stop hands on after a block
+  bool wait_pending_ = false;
   interp::Interpreter interpreter_;
   motion::Kernel kernel_;
   // The direction feed correction stage (spec 03), as in run_program.
