@@ -116,13 +116,27 @@ TEST_F(Cli, VersionAndHelpOnEveryCommand) {
 
 TEST_F(Cli, UsageErrorsExitTwo) {
   write_file(dir_ / "p.ngc", "G1 X1 F100\nM30\n");
-  for (const char* args :
-       {"", "frobnicate", "run", "run p.ngc --no-such-option", "run p.ngc --mode fast",
-        "run p.ngc --override abc", "run p.ngc --override 500", "run p.ngc --override -1",
-        "run p.ngc --override-at abc", "run p.ngc --override-at 1:50,x:20",
-        "run p.ngc --override-at 0.5:900", "run p.ngc --override-at -1:50", "run p.ngc --var depth",
-        "run p.ngc --var depth=deep", "run p.ngc --param x=1", "run p.ngc --param 0=1", "check",
-        "machine extra"}) {
+  for (const char* args : {"",
+                           "frobnicate",
+                           "run",
+                           "run p.ngc --no-such-option",
+                           "run p.ngc --mode fast",
+                           "run p.ngc --override abc",
+                           "run p.ngc --override 500",
+                           "run p.ngc --override -1",
+                           "run p.ngc --override-at abc",
+                           "run p.ngc --override-at 1:50,x:20",
+                           "run p.ngc --override-at 0.5:900",
+                           "run p.ngc --override-at -1:50",
+                           "run p.ngc --var depth",
+                           "run p.ngc --var depth=deep",
+                           "run p.ngc --param x=1",
+                           "run p.ngc --param 0=1",
+                           "run p.ngc --dry-run 0",
+                           "run p.ngc --dry-run fast",
+                           "run p.ngc --single-block -1",
+                           "check",
+                           "machine extra"}) {
     const Result r = run(args);
     EXPECT_EQ(r.code, 2) << "cncore " << args << "\n" << r.err;
     EXPECT_FALSE(r.err.empty()) << args;
@@ -329,6 +343,27 @@ TEST_F(Cli, StopModeIsSlowerThanLookahead) {
   const auto jb = nlohmann::json::parse(slurp(dir_ / "b.json"));
   EXPECT_EQ(jb.at("mode"), "stop");
   EXPECT_GT(jb.at("cycle_time_s").get<double>(), ja.at("cycle_time_s").get<double>());
+}
+
+// Operator modes: a dry run (F ignored) and single-block stops, named in the summary.
+TEST_F(Cli, DryRunAndSingleBlockAreInTheSummary) {
+  const std::string p = example("seed-line-arc-line.ngc");
+  ASSERT_EQ(run("run " + p + " --summary a.json").code, 0);
+  const Result d = run("run " + p + " --dry-run 10000 --summary d.json");
+  const Result b = run("run " + p + " --single-block 0.5 --summary b.json");
+  ASSERT_EQ(d.code, 0) << d.err;
+  ASSERT_EQ(b.code, 0) << b.err;
+  EXPECT_NE(d.out.find("dry run at 10000 mm/min"), std::string::npos) << d.out;
+  EXPECT_NE(b.out.find("single block (wait 0.5 s)"), std::string::npos) << b.out;
+  const auto ja = nlohmann::json::parse(slurp(dir_ / "a.json"));
+  const auto jd = nlohmann::json::parse(slurp(dir_ / "d.json"));
+  const auto jb = nlohmann::json::parse(slurp(dir_ / "b.json"));
+  EXPECT_FALSE(ja.contains("dry_run_feed_mm_min"));
+  EXPECT_EQ(jd.at("dry_run_feed_mm_min").get<double>(), 10000);
+  EXPECT_EQ(jb.at("single_block_wait_s").get<double>(), 0.5);
+  const double t = ja.at("cycle_time_s").get<double>();
+  EXPECT_LT(jd.at("cycle_time_s").get<double>(), t);  // its F is below the machine's top feed
+  EXPECT_GT(jb.at("cycle_time_s").get<double>(), t + 3 * 0.5);  // three blocks, three waits
 }
 
 // The acc/dec type that computed the time is in the summary: the built-in machine's default

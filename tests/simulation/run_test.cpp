@@ -125,6 +125,71 @@ struct HeapProbe : SampleObserver {
   }
 };
 
+// Path speed of sample k (mm/s) from the positions: |p_k − p_{k−1}| / τ.
+double speed_mm_s(const std::vector<motion::Sample>& s, std::size_t k) {
+  return norm(s[k].position.xyz() - s[k - 1].position.xyz()) / 0.001;
+}
+
+TEST(RunProgram, DryRunMovesFeedBlocksAtTheDryRunFeedAndRapidsAtTheRapidRate) {
+  // A long G1 at F600 (10 mm/s), an arc and a rapid back: dry run at 6000 mm/min (100 mm/s).
+  const std::string p =
+      program_file("dry.ngc", "G21 G90 G17\nG1 X100 F600\nG2 X120 Y0 I10 J0\nG0 X0 Y0\nM30\n");
+  auto top_speed_on_line = [&](const RunOptions& o, std::uint32_t line) {
+    Recorder r;
+    run_program(p, default_machine_config(), o, {&r});
+    double top = 0;
+    for (std::size_t k = 1; k < r.samples.size(); ++k)
+      if (r.samples[k].line == line) top = std::max(top, speed_mm_s(r.samples, k));
+    return top;
+  };
+  RunOptions dry;
+  dry.operator_modes.dry_run_feed_mm_min = 6000;
+  EXPECT_NEAR(top_speed_on_line({}, 2), 10, 0.05);
+  EXPECT_NEAR(top_speed_on_line(dry, 2), 100, 0.5);
+  // The arc (radius 10 mm, √(R·A) = 141 mm/s) runs at the dry-run feed too.
+  EXPECT_NEAR(top_speed_on_line(dry, 3), 100, 0.5);
+  EXPECT_LT(top_speed_on_line({}, 3), 10.05);
+  // The rapid keeps the rapid rate (15 000 mm/min) either way.
+  EXPECT_NEAR(top_speed_on_line(dry, 4), 250, 1.5);
+  EXPECT_NEAR(top_speed_on_line({}, 4), 250, 1.5);
+}
+
+TEST(RunProgram, SingleBlockStopsAtEveryBlockEndAndWaits) {
+  // Three collinear G1 blocks: without single block they are one line (merged, no stop).
+  const std::string p = program_file("single.ngc", "G21 G90\nG1 X10 F3000\nG1 X20\nG1 X30\nM30\n");
+  auto run = [&](const RunOptions& o) {
+    Recorder r;
+    run_program(p, default_machine_config(), o, {&r});
+    return r.samples;
+  };
+  const auto plain = run({});
+  for (const double wait_s : {0.0, 0.2}) {
+    RunOptions o;
+    o.operator_modes.single_block = true;
+    o.operator_modes.single_block_wait_s = wait_s;
+    const auto s = run(o);
+    for (const double x : {10.0, 20.0}) {
+      // The first sample at the block's end, the speed into it, and how long it stays.
+      std::size_t k = 1;
+      while (k < s.size() && std::abs(s[k].position[kX] - x) > 1e-9) ++k;
+      ASSERT_LT(k, s.size()) << "no sample at X" << x << " (wait " << wait_s << " s)";
+      EXPECT_LE(speed_mm_s(s, k), 2000 * 0.001 * 1.005) << "X" << x;  // ≤ Amax·τ: at rest
+      std::size_t at_rest = 0;
+      while (k + at_rest + 1 < s.size() && std::abs(s[k + at_rest + 1].position[kX] - x) <= 1e-9)
+        ++at_rest;
+      EXPECT_GE(static_cast<double>(at_rest) * 0.001, wait_s - 1e-9) << "X" << x;
+      EXPECT_LE(static_cast<double>(at_rest) * 0.001, wait_s + 0.0025) << "X" << x;
+    }
+    // Two more stops and the waits cost time; the end is the same.
+    EXPECT_GT(s.back().t_s, plain.back().t_s + 3 * wait_s);
+    EXPECT_NEAR(s.back().position[kX], 30, 1e-9);
+  }
+  // Without single block the tool passes X10 and X20 at speed.
+  std::size_t k = 1;
+  while (k < plain.size() && plain[k].position[kX] < 10) ++k;
+  EXPECT_GT(speed_mm_s(plain, k), 40);
+}
+
 TEST(RunProgram, HeapDoesNotGrowWithProgramLength) {
   std::string text = "G21 G90 G17 F6000\nG1 X100 Y0\n";
   constexpr int kChords = 60000;
