@@ -182,6 +182,7 @@ TEST(LineMerge, CornersAtAMergedLinesEndsKeepThePiecesPassingSpeed) {
   MachineConfig mc;
   const Limits lim = make_limits(mc, false);
   std::vector<Segment> seg;
+  seg.reserve(out.size());
   for (const Block& b : out) seg.push_back(make_motion_segment(b, lim));
   auto unit = [](const Block& b) {
     const Vec3 d = b.end.xyz() - b.start.xyz();

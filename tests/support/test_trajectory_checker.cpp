@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 #include <numbers>
+#include <ranges>
 #include <string>
 
 #include "trajectory_checker.hpp"
@@ -500,7 +501,7 @@ Trajectory turned_short(double v_mm, double short_mm, bool ramp) {
   std::vector<double> z{0};
   while (z.back() + v_mm <= 1 - short_mm - ramp_mm + 1e-12) z.push_back(z.back() + v_mm);
   for (const double f : fractions) z.push_back(z.back() + f * v_mm);
-  for (auto f = fractions.rbegin(); f != fractions.rend(); ++f) z.push_back(z.back() - *f * v_mm);
+  for (const double f : std::views::reverse(fractions)) z.push_back(z.back() - f * v_mm);
   while (z.back() - v_mm > 1e-12) z.push_back(z.back() - v_mm);
   z.push_back(0);
   Trajectory tr;
