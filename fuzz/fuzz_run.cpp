@@ -44,11 +44,6 @@ const cncore::MachineConfig& machine() {
   std::abort();
 }
 
-bool is_motion(const cncore::Block& b) {
-  return b.kind == cncore::BlockKind::kRapid || b.kind == cncore::BlockKind::kLine ||
-         b.kind == cncore::BlockKind::kArc;
-}
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -75,7 +70,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         kernel.end_of_program();
         break;
       }
-      if (is_motion(b)) end = b.end;
+      if (cncore::is_motion(b)) end = b.end;
       if (b.kind == cncore::BlockKind::kDwell)
         longest_dwell_s = std::max(longest_dwell_s, b.dwell_s);
       kernel.push(b);

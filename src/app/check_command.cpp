@@ -47,7 +47,7 @@ int command_check(const CheckArgs& a) {
       continue;
     }
     ++blocks;
-    if (b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc) {
+    if (is_motion(b)) {
       ++motion;
     }
     if (a.blocks) {

@@ -19,7 +19,7 @@ struct RunArgs {
   std::string report;      // --report FILE.html
   std::string adaptive;    // --adaptive on|off; empty: adaptive.enabled of the configuration
   std::string load_csv;    // --load FILE.csv
-  std::string heightmap, heightmap_grid;  // cutting simulation: --heightmap, --heightmap-grid
+  std::string heightmap, heightmap_grid;      // cutting simulation: --heightmap, --heightmap-grid
   std::optional<double> dry_run_feed_mm_min;  // --dry-run FEED
   std::optional<double> single_block_wait_s;  // --single-block WAIT_S
 };

@@ -68,4 +68,9 @@ struct Block {
   bool aux_waits = false;  // the motion must come to a stop before the event (M0, M1, M6, ...)
 };
 
+// G0, G1, G2/G3: the blocks that move the tool (and that the summary counts).
+inline bool is_motion(const Block& b) {
+  return b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc;
+}
+
 }  // namespace cncore

@@ -77,8 +77,7 @@ ReportObserver::ReportObserver(const MachineConfig& machine, std::string mode,
 }
 
 void ReportObserver::on_block(const Block& b) {
-  const bool motion =
-      b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc;
+  const bool motion = is_motion(b);
   if (!motion) {
     if (b.kind == BlockKind::kDwell || (b.kind == BlockKind::kAux && b.aux_waits)) {
       if (!pending_.empty() && !pending_.back().stop_after) {

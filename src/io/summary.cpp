@@ -424,7 +424,8 @@ std::string summary_to_json(const Summary& s, const MachineConfig& machine) {
   if (!s.accdec.empty()) j["accdec"] = s.accdec;
   if (s.operator_modes.dry_run_feed_mm_min > 0)
     j["dry_run_feed_mm_min"] = s.operator_modes.dry_run_feed_mm_min;
-  if (s.operator_modes.single_block) j["single_block_wait_s"] = s.operator_modes.single_block_wait_s;
+  if (s.operator_modes.single_block)
+    j["single_block_wait_s"] = s.operator_modes.single_block_wait_s;
   j["cycles"] = s.cycles;
   j["period_s"] = machine.period_s;
   j["machine"] = machine.name;

@@ -20,9 +20,7 @@ struct OperatorModes {
 // Applies the modes to interpreted block `b`. Returns true when a wait must follow it: `wait`
 // is then the dwell block to hand on next.
 inline bool apply_operator_modes(const OperatorModes& m, Block& b, Block& wait) {
-  const bool motion =
-      b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc;
-  if (!motion) return false;
+  if (!is_motion(b)) return false;
   if (m.dry_run_feed_mm_min > 0 && b.kind != BlockKind::kRapid)
     b.feed_mm_min = m.dry_run_feed_mm_min;
   if (!m.single_block) return false;

@@ -27,10 +27,6 @@ namespace cncore::sim {
 
 namespace {
 
-bool is_motion(const Block& b) {
-  return b.kind == BlockKind::kRapid || b.kind == BlockKind::kLine || b.kind == BlockKind::kArc;
-}
-
 // What the block source hands the motion cycle next: a kernel block, the end of the program,
 // or an error.
 enum class ItemKind : std::uint8_t {

@@ -33,10 +33,7 @@ bool ProgramStepper::produce(Block& block) {
       continue;
     }
     if (!error_ && interpreter_.next(source_)) {
-      if (source_.kind == BlockKind::kRapid || source_.kind == BlockKind::kLine ||
-          source_.kind == BlockKind::kArc) {
-        ++blocks_;
-      }
+      if (is_motion(source_)) ++blocks_;
       wait_pending_ = apply_operator_modes(modes_, source_, wait_);
       corrector_->put(source_);
       continue;

@@ -36,8 +36,7 @@ class ProgramStepper {
  public:
   ProgramStepper(const std::string& program_path, const MachineConfig& machine,
                  const motion::KernelOptions& kernel_options,
-                 const interp::Options& interpreter_options = {},
-                 const OperatorModes& modes = {});
+                 const interp::Options& interpreter_options = {}, const OperatorModes& modes = {});
   ~ProgramStepper();
   ProgramStepper(const ProgramStepper&) = delete;
   ProgramStepper& operator=(const ProgramStepper&) = delete;
