@@ -2,7 +2,7 @@
 //   cncore-sref PROGRAM.ngc -o TRAJ.csv [--machine FILE.toml] [--per-bin K] [--bins-per-a B]
 //               [--grid G] [--limit-factor M] [--bisect N] [--guide-joints J] [-v]
 //               [--trace FROM --trace-to TO] [--certify] [--max-lag L] [--recover]
-//               [--seed-trajectory T.csv]
+//               [--seed-trajectory T.csv] [--module]
 // Prints one line "cycles=… time_s=… bound_s=… ratio=… …" (ratio: time over cncore-bound's
 // bound); with --certify, --max-lag or --recover a second one (below). The trajectory has one row
 // per cycle from the start (t = 0) to the arrival on the end point (no trailing rest sample). Check
@@ -69,6 +69,9 @@
 // beam as one lineage, whatever the selection says: the result is never slower than T, and the
 // search can leave T wherever it finds better (ends with --max-lag's forced commits and with a
 // recovery).
+// --module runs motion::SampleSearch instead (the planner's version: streaming, fixed buffers,
+// certified and forced commits; --per-bin, --bins-per-a, --grid, --max-lag, --limit-factor,
+// --bisect and --guide-joints apply) and prints its counters on the second line.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -87,7 +90,9 @@
 #include "config/machine_config.hpp"
 #include "core/error.hpp"
 #include "limits.hpp"
+#include "motion/sample_search.hpp"
 #include "path_geometry.hpp"
+#include "planner/segment.hpp"
 #include "program_blocks.hpp"
 #include "trajectory.hpp"
 
@@ -766,11 +771,54 @@ std::vector<double> seed_positions(const Path& path, const cncore::testing::Traj
   return s;
 }
 
+// The planner's search (motion::SampleSearch) over the blocks: samples as arc lengths, fed as a
+// controller would (blocks while the window has room, every committed sample popped).
+std::vector<double> module_search(const std::vector<cncore::Block>& blocks,
+                                  const cncore::MachineConfig& machine, const Options& opt,
+                                  cncore::motion::SampleSearchStats& stats) {
+  cncore::motion::SampleSearchOptions o;
+  o.per_bin = opt.per_bin;
+  o.bins_per_a = opt.bins_per_a;
+  o.grid = opt.grid;
+  o.limit_factor = opt.factor;
+  o.bisect = opt.bisect;
+  o.guide_joints = opt.guide_joints;
+  if (opt.max_lag > 0) o.max_lag_cycles = opt.max_lag;
+  cncore::motion::SampleSearch ss(cncore::planner::make_limits(machine, false), o);
+  std::vector<double> s;
+  std::size_t next = 0;
+  bool ended = false;
+  AxisVec p;
+  std::uint32_t line = 0;
+  double sm = 0;
+  while (!ss.finished()) {
+    while (next < blocks.size() && ss.wants_segment())
+      if (!ss.push(blocks[next++]))
+        throw std::runtime_error("line " + std::to_string(blocks[next - 1].line) +
+                                 ": not supported by the module");
+    if (next == blocks.size() && !ended) {
+      ss.end_of_program();
+      ended = true;
+    }
+    const bool moved = ss.advance();
+    std::size_t popped = 0;
+    while (ss.pop(p, line, sm)) {
+      s.push_back(sm);
+      ++popped;
+    }
+    if (ss.failed()) throw std::runtime_error("the module's recovery failed");
+    if (!moved && popped == 0 && !ss.finished() && (next == blocks.size() || !ss.wants_segment()))
+      throw std::runtime_error("the module is stuck (window full)");
+  }
+  stats = ss.stats();
+  return s;
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"Search for a sampled trajectory with few cycles that passes the checker"};
   std::string program, machine_file, out, seed_file;
   Options opt;
-  bool verbose = false;
+  bool verbose = false, module = false;
   app.add_option("program", program, "part program (G-code)")->required();
   app.add_option("-o,--output", out, "trajectory CSV to write")->required();
   app.add_option("--machine", machine_file, "machine configuration (TOML); built-in if absent");
@@ -799,6 +847,8 @@ int run(int argc, char** argv) {
   app.add_option("--seed-trajectory", seed_file,
                  "a trajectory CSV that keeps the rules (e.g. `cncore run --trajectory`): its "
                  "samples stay in the beam as one lineage, so the result is never slower");
+  app.add_flag("--module", module,
+               "run motion::SampleSearch (the planner's streaming version) instead");
   app.add_flag("-v,--verbose", verbose, "progress every 1000 cycles on stderr");
   try {
     app.parse(argc, argv);
@@ -816,7 +866,15 @@ int run(int argc, char** argv) {
     std::vector<double> seed;
     if (!seed_file.empty())
       seed = seed_positions(path, cncore::testing::load_trajectory_csv(seed_file));
-    const Result res = search(pb, opt, verbose, &seed);
+    cncore::motion::SampleSearchStats mstats;
+    Result res;
+    if (module) {
+      res.s = module_search(blocks, machine, opt, mstats);
+      res.expanded = mstats.expanded;
+      res.max_beam = mstats.max_beam;
+    } else {
+      res = search(pb, opt, verbose, &seed);
+    }
     const double secs =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -852,7 +910,10 @@ int run(int argc, char** argv) {
         cycles, t, bound, bound > 0 ? t / bound : 0.0, pb.segments(), pb.length(), opt.per_bin,
         opt.bins_per_a, opt.grid, opt.factor, res.max_beam, res.expanded, secs,
         static_cast<double>(res.expanded) * per_cycle, 1e6 * secs * per_cycle);
-    if (opt.certify || opt.max_lag > 0 || opt.recover)
+    if (module)
+      std::printf("module: forced=%zu recoveries=%zu uncertified=%zu longest_brake=%zu\n",
+                  mstats.forced, mstats.recoveries, mstats.uncertified, mstats.longest_brake);
+    else if (opt.certify || opt.max_lag > 0 || opt.recover)
       std::printf(
           "committed=%zu certified=%zu longest_brake=%zu longest_lag=%zu first_uncertified=%zu "
           "forced_drops=%zu recoveries=%zu\n",

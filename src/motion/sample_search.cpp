@@ -1,0 +1,551 @@
+// The sample search: see sample_search.hpp for what it does, docs/lookahead.md for why, and
+// bench/bound/sampled_reference.cpp (cncore-sref) for the whole-program version whose figures
+// this one reproduces with fixed buffers.
+#include "motion/sample_search.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace cncore::motion {
+
+namespace {
+constexpr double kWindow = 1e-5;  // mm before a joint where no sample lands (checker's snap)
+constexpr double kRound = 1e-9;   // mm of rounding allowed on a step's range
+constexpr std::size_t kCoalesceEvery = 8;  // cycles between searches for the commit point
+}  // namespace
+
+SampleSearch::SampleSearch(const planner::Limits& limits, const SampleSearchOptions& options)
+    : lim_(limits), opt_(options) {
+  const double m = opt_.limit_factor;
+  a_ = m * lim_.amax_pc2;
+  normal_ = a_;
+  resultant_ = lim_.bound_resultant ? a_ : 0.0;
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    if (!lim_.axis_on[i]) continue;
+    if (lim_.axis_amax_pc2[i] > 0) axis_a_[i] = m * lim_.axis_amax_pc2[i];
+    if (lim_.axis_vmax_pc[i] > 0) axis_v_[i] = m * lim_.axis_vmax_pc[i];
+  }
+  max_step_ = m * std::max(lim_.vmax_pc, lim_.rapid_pc);
+  // The front stays this far before a window end that is not the program's: there the guide
+  // never sees the window's temporary stop, and neither does the brake of a committed state.
+  reach_mm_ = brake_distance(max_step_, 0) + 2 * max_step_;
+  bin_w_ = a_ / opt_.bins_per_a;
+  nbins_ = static_cast<std::size_t>(max_step_ / bin_w_) + 2;
+  beam_cap_ = nbins_ * opt_.per_bin;
+  hist_rows_ = opt_.max_lag_cycles + 2 * kCoalesceEvery;
+  cand_cap_ = opt_.grid + 3 * opt_.joints_per_step;
+  // The brake from a state at the top speed takes max_step/a cycles plus a few at the caps.
+  const auto brake_cycles = static_cast<std::size_t>(max_step_ / a_) + 64;
+  const std::size_t out_cap = std::max(opt_.output_cycles, 2 * (hist_rows_ + brake_cycles));
+
+  segs_.resize(opt_.window_segments);
+  beam_.reserve(beam_cap_);
+  bins_.resize(beam_cap_);
+  bin_n_.assign(nbins_, 0);
+  cand_s_.resize(cand_cap_);
+  cands_.resize(3 * cand_cap_);
+  hist_.resize(hist_rows_ * beam_cap_);
+  hist_n_.assign(hist_rows_, 0);
+  mark_.assign(beam_cap_, 0);
+  idx_a_.resize(beam_cap_);
+  idx_b_.resize(beam_cap_);
+  trace_.resize(hist_rows_ + 1);
+  out_.resize(out_cap);
+  out_reserve_ = hist_rows_ + brake_cycles;
+}
+
+bool SampleSearch::wants_segment() const {
+  return seg_end_ - seg_base_ < segs_.size() && !program_ended_;
+}
+
+bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
+  if (!wants_segment() || segment.kind != planner::ItemKind::kMotion || segment.length_mm <= 0)
+    return false;
+  const Vec3 chord = segment.end.xyz() - segment.start.xyz();
+  if (!segment.arc && norm(chord) <= 0) return false;  // rotary-only: not supported
+  if (seg_end_ > 0 && std::abs(segment.s0_mm - joint_s(seg_end_ - 1)) > 1e-9) return false;
+  const std::uint64_t idx = seg_end_;
+  Seg& g = seg(idx);
+  g.geo = segment;
+  const double m = opt_.limit_factor;
+  const double feed = segment.feed_pc > 0 ? segment.feed_pc : segment.vb_pc;
+  g.cap = m * std::min(feed, segment.vb_pc);
+  g.joint_cap = a_;  // the window's end: a stop until the next segment arrives
+  g.stop = true;
+  g.hard_stop = stop_after;
+  if (idx > 0) {
+    Seg& prev = seg(idx - 1);
+    if (!prev.hard_stop) {
+      prev.joint_cap = m * planner::joint_speed_pc(prev.geo, g.geo, lim_, false);
+      prev.stop = false;
+    }
+  }
+  ++seg_end_;
+  update_eff(idx);
+  if (idx == 0) {
+    // The tool rests at the first segment's start: cycle 0.
+    const double s0 = segment.s0_mm;
+    beam_.assign(1, Node{s0, s0, 0, 0});
+    hist(0, 0) = {s0, -1};
+    hist_count(0) = 1;
+    last_commit_ = beam_[0];
+    emit(s0, 0);
+  }
+  return true;
+}
+
+bool SampleSearch::push(const Block& block) {
+  if (block.kind == BlockKind::kDwell) return false;
+  if (block.kind == BlockKind::kAux) {
+    if (block.aux_waits && seg_end_ > 0) {
+      Seg& last = seg(seg_end_ - 1);
+      last.hard_stop = true;  // (it is the window's end: already a stop)
+    }
+    return true;
+  }
+  if (!wants_segment()) return false;
+  planner::Segment s = planner::make_motion_segment(block, lim_);
+  if (s.length_mm <= 0) return true;
+  s.s0_mm = seg_end_ > 0 ? joint_s(seg_end_ - 1) : 0.0;
+  return push(s, block.path_mode == PathMode::kExactStop);
+}
+
+void SampleSearch::end_of_program() {
+  program_ended_ = true;
+}
+
+// Shortest distance from a sample reached with step d to the last sample before a joint that
+// must be crossed with a step ≤ c, the steps shrinking by a per cycle at most: the landings of
+// d − a, d − 2a, …, while they are above c:
+//   Σ_{i=1}^{m−1} (d − i·a) = (m−1)·d − a·m·(m−1)/2,  m = ⌈(d − c)/a⌉.
+double SampleSearch::brake_distance(double d, double c) const {
+  if (d - a_ <= c) return 0;
+  const double m1 = std::ceil((d - c) / a_) - 1;
+  return m1 * d - a_ * m1 * (m1 + 1) / 2;
+}
+
+// Effective caps for the backward guide, from segment `last` back while they change: a
+// crossing step of joint j touches segment j, so it is below that segment's cap too, and after
+// crossing j, joint j+1 must still be met (the largest d with brake_distance(d, eff_{j+1}) <
+// room, by bisection).
+void SampleSearch::update_eff(std::uint64_t last) {
+  Seg& l = seg(last);
+  l.eff = std::min(l.joint_cap, l.cap);
+  for (std::uint64_t j = last; j-- > seg_base_;) {
+    Seg& g = seg(j);
+    double eff = std::min(g.joint_cap, g.cap);
+    const double next = seg(j + 1).eff;
+    const double room = joint_s(j + 1) - joint_s(j);
+    if (brake_distance(eff, next) >= room) {
+      double lo = 0, hi = eff;
+      for (int it = 0; it < 60; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (brake_distance(mid, next) < room ? lo : hi) = mid;
+      }
+      eff = lo;
+    }
+    if (eff == g.eff && j + 1 < last) break;
+    g.eff = eff;
+  }
+}
+
+std::uint64_t SampleSearch::seg_of(double s, std::uint64_t hint) const {
+  std::uint64_t j = std::clamp(hint, seg_base_, seg_end_ - 1);
+  while (j + 1 < seg_end_ && s >= seg(j + 1).geo.s0_mm) ++j;
+  while (j > seg_base_ && s < seg(j).geo.s0_mm) --j;
+  return j;
+}
+
+AxisVec SampleSearch::point(double s, std::uint64_t segment) const {
+  const planner::Segment& g = seg(segment).geo;
+  return g.point_at(s - g.s0_mm);
+}
+
+// The guide: a necessary condition to meet the caps ahead from a sample at s reached with step
+// d (each joint's effective cap on its own, exact for the tangential rule).
+bool SampleSearch::can_brake(double s, double d, std::uint64_t segment) const {
+  const double free = brake_distance(d, 0);  // a joint farther than this never binds
+  for (std::uint64_t j = segment, k = 0; j < seg_end_ && k < opt_.guide_joints; ++j, ++k) {
+    const double js = joint_s(j);
+    if (js <= s) continue;
+    if (js - s > free) break;
+    if (brake_distance(d, seg(j).eff) >= js - s) return false;
+  }
+  return true;
+}
+
+// Static rules of a step from s (in `segment`) to s2: joints crossed, stops, segment caps and
+// the window before a joint. Writes the landing segment (a landing on a joint is held by the
+// segment after it).
+bool SampleSearch::step_ok(double s, std::uint64_t segment, double s2, std::uint64_t& seg2) const {
+  const double d = s2 - s;
+  if (d < 0) return false;
+  double cap = seg(segment).cap;
+  std::uint64_t j = segment;
+  for (; j < seg_end_; ++j) {
+    const Seg& g = seg(j);
+    const double js = g.geo.end_mm();
+    if (js <= s) continue;
+    if (s2 < js) {
+      if (s2 > js - kWindow) return false;  // the checker might count the joint as reached
+      break;
+    }
+    cap = std::min(cap, g.joint_cap);  // crossed (or landed on) joint j
+    if (g.stop && s2 > js) return false;
+    if (s2 == js) {
+      ++j;
+      break;
+    }
+    if (j + 1 < seg_end_) cap = std::min(cap, seg(j + 1).cap);
+    if (d > cap) return false;
+  }
+  if (d > cap) return false;
+  seg2 = seg_of(s2, std::min(j, seg_end_ - 1));
+  return true;
+}
+
+bool SampleSearch::dynamics_ok(const AxisVec& p0, const AxisVec& p1, const AxisVec& p2) const {
+  const AxisVec c1 = p1 - p0, c2 = p2 - p1;
+  for (std::size_t i = 0; i < kMaxAxes; ++i) {
+    if (axis_v_[i] > 0 && std::abs(c2[i]) > axis_v_[i]) return false;
+    if (axis_a_[i] > 0 && std::abs(c2[i] - c1[i]) > axis_a_[i]) return false;
+  }
+  const Vec3 d1 = c1.xyz(), d2 = c2.xyz();
+  const double l1 = norm(d1), l2 = norm(d2);
+  // Normal: √(l1·l2)·|d̂2 − d̂1| = 2·√(l1·l2)·sin(θ/2), the checker's a_n·τ².
+  if (l1 > 0 && l2 > 0 && std::sqrt(l1 * l2) * norm((1.0 / l2) * d2 - (1.0 / l1) * d1) > normal_)
+    return false;
+  return resultant_ <= 0 || norm(d2 - d1) <= resultant_;
+}
+
+// The feasible next landings of state n into cands_[0, count): a grid over [d − a, d + a], every
+// joint in reach (on it, just before it, and the largest step the caps crossed so far allow),
+// and the boundary of the dynamic rules between a feasible and a rejected candidate (bisection).
+void SampleSearch::expand(const Node& n, std::size_t& count) {
+  const double s = n.s, d = n.s - n.sp;
+  const AxisVec p0 = point(n.sp, seg_of(n.sp, n.seg));
+  const AxisVec p1 = point(s, n.seg);
+  const double lo = std::max(0.0, d - a_), hi = d + a_;
+  std::size_t nc = 0;
+  for (std::size_t i = 0; i < opt_.grid; ++i) {
+    const double x =
+        opt_.grid > 1 ? lo + (hi - lo) * static_cast<double>(i) / static_cast<double>(opt_.grid - 1)
+                      : hi;
+    cand_s_[nc++] = s + x;
+  }
+  double cum = std::numeric_limits<double>::infinity();
+  std::size_t joints = 0;
+  for (std::uint64_t j = n.seg; j < seg_end_ && joints < opt_.joints_per_step; ++j) {
+    const Seg& g = seg(j);
+    const double js = g.geo.end_mm();
+    if (js <= s) continue;
+    if (js > s + hi) break;
+    ++joints;
+    if (js >= s + lo - kWindow) {
+      cand_s_[nc++] = js;
+      cand_s_[nc++] = js - kWindow;
+    }
+    cum = std::min(cum, g.joint_cap);
+    if (s + cum >= js) cand_s_[nc++] = s + std::min(cum, hi);
+    if (g.stop) break;
+  }
+  std::sort(cand_s_.begin(), cand_s_.begin() + static_cast<std::ptrdiff_t>(nc));
+  nc = static_cast<std::size_t>(
+      std::unique(cand_s_.begin(), cand_s_.begin() + static_cast<std::ptrdiff_t>(nc)) -
+      cand_s_.begin());
+  std::size_t ne = 0;
+  for (std::size_t i = 0; i < nc; ++i) {
+    const double s2 = cand_s_[i];
+    const double d2 = s2 - s;
+    if (d2 < lo - kRound || d2 > hi + kRound) continue;  // s + x − s: ulps of s
+    Cand c{s2, n.seg, 0};
+    if (step_ok(s, n.seg, s2, c.seg2)) c.ok = dynamics_ok(p0, p1, point(s2, c.seg2)) ? 1 : -1;
+    cands_[ne++] = c;
+  }
+  const std::size_t base = ne;
+  for (std::size_t i = 0; i + 1 < base; ++i) {
+    for (int dir = 0; dir < 2; ++dir) {
+      const Cand& good = cands_[dir == 0 ? i : i + 1];
+      const Cand& bad = cands_[dir == 0 ? i + 1 : i];
+      if (good.ok != 1 || bad.ok != -1) continue;
+      double g = good.s2, b = bad.s2;
+      std::uint64_t gseg = good.seg2;
+      for (int it = 0; it < opt_.bisect; ++it) {
+        const double mid = 0.5 * (g + b);
+        std::uint64_t mseg = 0;
+        if (step_ok(s, n.seg, mid, mseg) && dynamics_ok(p0, p1, point(mid, mseg))) {
+          g = mid;
+          gseg = mseg;
+        } else {
+          b = mid;
+        }
+      }
+      if (g != good.s2) cands_[ne++] = {g, gseg, 1};
+    }
+  }
+  count = 0;
+  for (std::size_t i = 0; i < ne; ++i)
+    if (cands_[i].ok == 1) cands_[count++] = cands_[i];
+}
+
+// The greedy brake: the smallest feasible step every cycle until the tool rests (step 0, or
+// the end point reached with a step ≤ a). Returns the cycles taken, 0 if it fails. With
+// `record`, each of its samples is committed.
+std::size_t SampleSearch::brake_to_rest(Node n, bool record) {
+  const double end = program_ended_ ? joint_s(seg_end_ - 1) : -1.0;
+  for (std::size_t k = 1; k < out_reserve_; ++k) {
+    std::size_t count = 0;
+    expand(n, count);
+    const Cand* best = nullptr;
+    for (std::size_t i = 0; i < count; ++i)
+      if (!best || cands_[i].s2 < best->s2) best = &cands_[i];
+    if (!best) return 0;
+    const double d2 = best->s2 - n.s;
+    n = Node{n.s, best->s2, best->seg2, -1};
+    if (record) {
+      emit(n.s, n.seg);
+      last_commit_ = n;
+      ++committed_;
+    }
+    if (d2 == 0 || (n.s == end && d2 <= a_)) return k;
+  }
+  return 0;
+}
+
+// Keeps a child if it is among the K farthest of its speed bin (ties: the smaller previous
+// sample), dropping exact duplicates.
+void SampleSearch::offer(const Node& c) {
+  const std::size_t b = std::min(nbins_ - 1, static_cast<std::size_t>((c.s - c.sp) / bin_w_));
+  Node* bin = &bins_[b * opt_.per_bin];
+  std::size_t& nb = bin_n_[b];
+  auto better = [](const Node& x, const Node& y) { return x.s != y.s ? x.s > y.s : x.sp < y.sp; };
+  for (std::size_t i = 0; i < nb; ++i)
+    if (std::abs(bin[i].s - c.s) < 1e-12 && std::abs(bin[i].sp - c.sp) < 1e-12) return;
+  std::size_t pos = nb;
+  while (pos > 0 && better(c, bin[pos - 1])) --pos;
+  if (pos >= opt_.per_bin) return;
+  const std::size_t last = std::min(nb, opt_.per_bin - 1);
+  for (std::size_t i = last; i > pos; --i) bin[i] = bin[i - 1];
+  bin[pos] = c;
+  nb = std::min(nb + 1, opt_.per_bin);
+}
+
+void SampleSearch::emit(double s, std::uint64_t segment) {
+  // A sample on a joint belongs to the segment it arrived by (its block's line).
+  std::uint64_t line_seg = segment;
+  if (line_seg > seg_base_ && s == seg(line_seg).geo.s0_mm) --line_seg;
+  Out& o = out_[(out_head_ + out_count_) % out_.size()];
+  o = {point(s, segment), seg(line_seg).geo.line, s};
+  ++out_count_;
+}
+
+bool SampleSearch::pop(AxisVec& position, std::uint32_t& line, double& s_mm) {
+  if (out_count_ == 0) return false;
+  const Out& o = out_[out_head_];
+  position = o.p;
+  line = o.line;
+  s_mm = o.s;
+  out_head_ = (out_head_ + 1) % out_.size();
+  --out_count_;
+  return true;
+}
+
+// Commits the state n (the cycle after committed_) if the greedy brake brings it to rest.
+bool SampleSearch::certify_and_emit(const Node& n) {
+  const std::size_t k = brake_to_rest(n, false);
+  if (k == 0) {
+    ++stats_.uncertified;
+    return false;
+  }
+  stats_.longest_brake = std::max(stats_.longest_brake, k);
+  ++committed_;
+  last_commit_ = n;
+  emit(n.s, n.seg);
+  return true;
+}
+
+// The lineage of entry i of row `cycle`, from committed_ + 1 up to `cycle`, is committed state
+// by state; a state whose brake fails ends it in a recovery.
+void SampleSearch::commit_lineage(std::uint64_t cycle, std::size_t i) {
+  const auto len = static_cast<std::size_t>(cycle - committed_);
+  for (std::size_t k = len; k-- > 0;) {
+    const Hist& h = hist(committed_ + 1 + k, i);
+    trace_[k] = Node{0, h.s, 0, static_cast<std::int32_t>(i)};
+    i = static_cast<std::size_t>(h.parent);
+  }
+  for (std::size_t k = 0; k < len; ++k) {
+    Node n{last_commit_.s, trace_[k].s, 0, -1};
+    n.seg = seg_of(n.s, last_commit_.seg);
+    if (!certify_and_emit(n)) {
+      recover();
+      return;
+    }
+  }
+  retire();
+}
+
+void SampleSearch::retire() {
+  while (seg_base_ + 1 < seg_end_ && seg(seg_base_).geo.end_mm() < last_commit_.sp) ++seg_base_;
+}
+
+// The newest cycle from which every live state descends, by walking the live states' ancestors
+// back one row at a time (distinct indices marked with a stamp).
+void SampleSearch::find_coalescence() {
+  std::size_t n = beam_.size();
+  for (std::size_t i = 0; i < n; ++i) idx_a_[i] = static_cast<std::uint32_t>(i);
+  for (std::uint64_t c = front_; c > committed_; --c) {
+    if (n == 1) {
+      commit_lineage(c, idx_a_[0]);
+      return;
+    }
+    ++stamp_;
+    std::size_t m = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto p = static_cast<std::uint32_t>(hist(c, idx_a_[i]).parent);
+      if (mark_[p] == stamp_) continue;
+      mark_[p] = stamp_;
+      idx_b_[m++] = p;
+    }
+    std::swap(idx_a_, idx_b_);
+    n = m;
+  }
+}
+
+std::size_t SampleSearch::ancestor(std::size_t i, std::uint64_t cycle) const {
+  for (std::uint64_t c = front_; c > cycle; --c) i = static_cast<std::size_t>(hist(c, i).parent);
+  return i;
+}
+
+// The commits lag the front by more than L: keep only the states that share, L/2 cycles back,
+// the ancestor of the farthest state whose ancestor there brakes to rest.
+void SampleSearch::force_commit() {
+  ++stats_.forced;
+  const std::uint64_t c0 = front_ - opt_.max_lag_cycles / 2;
+  const std::size_t n = beam_.size();
+  for (std::size_t i = 0; i < n; ++i) idx_a_[i] = static_cast<std::uint32_t>(i);
+  std::sort(idx_a_.begin(), idx_a_.begin() + static_cast<std::ptrdiff_t>(n),
+            [&](std::uint32_t x, std::uint32_t y) { return beam_[x].s > beam_[y].s; });
+  std::size_t target = beam_cap_;
+  for (std::size_t k = 0; k < n && target == beam_cap_; ++k) {
+    const std::size_t t = ancestor(idx_a_[k], c0);
+    const Hist& h = hist(c0, t);
+    const double sp = hist(c0 - 1, static_cast<std::size_t>(h.parent)).s;
+    const Node st{sp, h.s, seg_of(h.s, last_commit_.seg), -1};
+    if (brake_to_rest(st, false) > 0) target = t;
+  }
+  if (target == beam_cap_) {
+    recover();
+    return;
+  }
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (ancestor(i, c0) != target) continue;
+    hist(front_, kept) = hist(front_, i);
+    beam_[kept] = beam_[i];
+    beam_[kept].parent = static_cast<std::int32_t>(kept);
+    ++kept;
+  }
+  beam_.resize(kept);
+  hist_count(front_) = kept;
+  find_coalescence();
+}
+
+// The beam died, or a state to commit did not brake to rest: the tool brakes to rest from the
+// newest committed state (which did), and the search starts again from rest.
+void SampleSearch::recover() {
+  ++stats_.recoveries;
+  if (brake_to_rest(last_commit_, true) == 0) {
+    failed_ = true;  // cannot happen: the state was certified by this very brake
+    return;
+  }
+  front_ = committed_;
+  const double s = last_commit_.s;
+  if (program_ended_ && s == joint_s(seg_end_ - 1)) {
+    finished_ = true;
+    return;
+  }
+  last_commit_.sp = s;
+  beam_.assign(1, Node{s, s, last_commit_.seg, 0});
+  hist(front_, 0) = {s, -1};
+  hist_count(front_) = 1;
+  retire();
+}
+
+bool SampleSearch::advance() {
+  if (finished_ || failed_ || seg_end_ == 0) return false;
+  if (out_.size() - out_count_ < out_reserve_) return false;
+  double far = 0;
+  for (const Node& n : beam_) far = std::max(far, n.s);
+  const double window_end = joint_s(seg_end_ - 1);
+  if (!program_ended_ && far + reach_mm_ >= window_end) return false;
+  const double end = program_ended_ ? window_end : std::numeric_limits<double>::infinity();
+
+  std::fill(bin_n_.begin(), bin_n_.end(), 0);
+  std::int64_t done = -1;
+  for (std::size_t bi = 0; bi < beam_.size() && done < 0; ++bi) {
+    const Node nd = beam_[bi];
+    std::size_t count = 0;
+    expand(nd, count);
+    for (std::size_t i = 0; i < count; ++i) {
+      const Cand& c = cands_[i];
+      const double d2 = c.s2 - nd.s;
+      if (c.s2 == end) {
+        if (d2 <= a_) {
+          done = static_cast<std::int64_t>(bi);
+          break;
+        }
+        continue;
+      }
+      if (!can_brake(c.s2, d2, c.seg2)) continue;
+      offer(Node{nd.s, c.s2, c.seg2, static_cast<std::int32_t>(bi)});
+    }
+  }
+  stats_.expanded += beam_.size();
+  ++stats_.cycles;
+  if (done >= 0) {
+    // The end point: commit the lineage to it (it ends at rest, so needs no brake).
+    auto i = static_cast<std::size_t>(done);
+    const auto len = static_cast<std::size_t>(front_ - committed_);
+    for (std::size_t k = len; k-- > 0;) {
+      const Hist& h = hist(committed_ + 1 + k, i);
+      trace_[k] = Node{0, h.s, 0, 0};
+      i = static_cast<std::size_t>(h.parent);
+    }
+    for (std::size_t k = 0; k < len; ++k) {
+      last_commit_ = Node{last_commit_.s, trace_[k].s, seg_of(trace_[k].s, last_commit_.seg), -1};
+      emit(last_commit_.s, last_commit_.seg);
+    }
+    last_commit_ = Node{last_commit_.s, end, seg_end_ - 1, -1};
+    emit(end, seg_end_ - 1);
+    committed_ = front_ = front_ + 1;
+    finished_ = true;
+    return true;
+  }
+  std::size_t kept = 0;
+  for (std::size_t b = 0; b < nbins_; ++b) kept += bin_n_[b];
+  if (kept == 0) {
+    recover();
+    return true;
+  }
+  ++front_;
+  beam_.clear();
+  for (std::size_t b = 0; b < nbins_; ++b) {
+    for (std::size_t k = 0; k < bin_n_[b]; ++k) {
+      const Node& c = bins_[b * opt_.per_bin + k];
+      hist(front_, beam_.size()) = {c.s, c.parent};
+      beam_.push_back(c);
+      beam_.back().parent = static_cast<std::int32_t>(beam_.size() - 1);
+    }
+  }
+  hist_count(front_) = beam_.size();
+  stats_.max_beam = std::max(stats_.max_beam, beam_.size());
+  if (front_ - committed_ > opt_.max_lag_cycles) {
+    force_commit();
+  } else if (front_ % kCoalesceEvery == 0) {
+    find_coalescence();
+  }
+  return true;
+}
+
+}  // namespace cncore::motion

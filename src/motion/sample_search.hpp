@@ -1,0 +1,186 @@
+// A sample search ahead of the tool (issue 9; design in docs/lookahead.md, "A sample search
+// ahead of the tool"). The look-ahead's zones must hold for every placement of the samples; on a
+// staircase of alternating micro-corners (a circle of rounded short chords) that costs ~15 %
+// against the time-optimal bound. This stage instead searches over where the samples land: a
+// beam of states (s_prev, s), one cycle at a time, under the trajectory checker's own rules, run
+// ahead of the tool. The cycle only reads committed samples.
+//
+//   push(segment) ──▶ window ──▶ advance(): beam at the front cycle F
+//                                   │ lineages coalesce, or a commit is forced after L cycles
+//                                   ▼
+//   pop() ◀── committed samples (a fixed ring); each committed state has a greedy brake to rest
+//
+// Safety: a state is committed only if the greedy brake (the smallest feasible step every
+// cycle) brings it to rest. If the beam dies (no state can continue), the tool takes that brake
+// from the newest committed state and the search starts again from rest: the output always
+// keeps the rules. Every buffer is sized at construction: advance() and pop() do not allocate.
+//
+// Rules of a step from s to s2 (every limit scaled by limit_factor, in mm per cycle or cycle²):
+//   - |d2 − d1| ≤ a on the path (tangential), d ≥ 0, and the motion starts at rest;
+//   - the step of the first sample at or past a joint ≤ the joint's Vg (planner::joint_speed_pc);
+//   - every step ≤ the speed limit (F at 100 %, Vb) of each segment it touches;
+//   - normal: √(l1·l2)·|d̂2 − d̂1| ≤ a over consecutive XYZ chords; per-axis speed and
+//     acceleration by finite differences; the resultant |Δ²P| ≤ a when the limits bound it;
+//   - stops (exact stop, the end): a sample lands exactly on the stop point with a step ≤ a and
+//     none passes it.
+// Not done (step 1 of the design): the feed override (planned at 100 %), feed hold, late blocks
+// and the filters (jerk stage, post filter), dwells and events, rotary-only segments, and the
+// kernel's own samples as a lineage of the beam (so it may be slower than the kernel on long
+// arcs). The acceleration type does not use it yet.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "core/block.hpp"
+#include "core/geometry.hpp"
+#include "planner/segment.hpp"
+
+namespace cncore::motion {
+
+struct SampleSearchOptions {
+  std::size_t window_segments = 8192;  // segments held ahead of the committed samples
+  std::size_t per_bin = 1;             // K: states kept per speed bin
+  double bins_per_a = 2;               // B: speed bins per a (bin width a/B)
+  std::size_t grid = 9;                // G: uniform candidate steps in [d − a, d + a]
+  std::size_t joints_per_step = 32;    // joint candidates per expansion (more are not tried)
+  std::size_t max_lag_cycles = 128;    // L: commits lag the front by at most this (+ 8)
+  std::size_t output_cycles = 1024;    // committed samples waiting for pop()
+  double limit_factor = 0.999;         // every limit scaled by this (the checker's margin kept)
+  int bisect = 14;                     // steps to the normal / per-axis rules' boundary
+  std::size_t guide_joints = 16;       // joints ahead checked by the backward guide
+};
+
+struct SampleSearchStats {
+  std::size_t cycles = 0;       // front cycles searched
+  std::size_t max_beam = 0;     // most live states in one cycle
+  std::size_t expanded = 0;     // states expanded (beam sizes summed)
+  std::size_t forced = 0;       // forced commits (lag above L)
+  std::size_t recoveries = 0;   // deaths met by the brake to rest
+  std::size_t uncertified = 0;  // coalesced states whose brake failed (met like a death)
+  std::size_t longest_brake = 0;
+};
+
+class SampleSearch {
+ public:
+  SampleSearch(const planner::Limits& limits, const SampleSearchOptions& options);
+
+  // Room for another segment in the window.
+  bool wants_segment() const;
+  // Appends a motion segment with XYZ length > 0; its s0_mm must continue the previous one's
+  // end. stop_after: the tool must stop at its end (exact stop). Returns false (and keeps
+  // nothing) when the segment is not supported (see the file comment) or the window is full.
+  bool push(const planner::Segment& segment, bool stop_after);
+  // Appends an interpreted block: a motion block becomes a segment (zero-length ones are
+  // dropped), an exact stop (G9, G61.1) or an event that waits (M0, M6 …) stops the tool, other
+  // events are ignored. False for what is not supported (dwells, rotary-only moves) or a full
+  // window.
+  bool push(const Block& block);
+  // No more segments: the last one ends in a stop.
+  void end_of_program();
+
+  // Searches one more cycle at the front (planning time, not the cycle). Returns false when it
+  // cannot: it waits for segments (the front must stay a braking distance before the window's
+  // end), the output ring is full, or the end point is committed.
+  bool advance();
+
+  // The next committed sample (the cycle's side: O(1), no allocation). False when none waits.
+  bool pop(AxisVec& position, std::uint32_t& line, double& s_mm);
+  std::size_t ready() const { return out_count_; }
+  // Every sample up to the end point has been committed.
+  bool finished() const { return finished_; }
+  // A recovery's brake failed (a bug: the state was certified by that very brake).
+  bool failed() const { return failed_; }
+  const SampleSearchStats& stats() const { return stats_; }
+
+ private:
+  struct Node {
+    double sp = 0, s = 0;   // previous and current sample (path mm)
+    std::uint64_t seg = 0;  // segment holding s (global index)
+    std::int32_t parent = -1;
+  };
+  struct Hist {
+    double s;
+    std::int32_t parent;
+  };
+  struct Cand {
+    double s2;
+    std::uint64_t seg2;
+    int ok;  // 1 feasible, 0 static rule fails, −1 dynamic rule fails
+  };
+  struct Seg {
+    planner::Segment geo;
+    double cap = 0;          // largest step inside it (mm/cycle)
+    double joint_cap = 0;    // largest step that crosses its end
+    double eff = 0;          // joint cap for the backward guide (≤ joint_cap)
+    bool stop = false;       // its end is a stop (exact stop, the end, or the window's end)
+    bool hard_stop = false;  // an exact stop (stays one when the next segment arrives)
+  };
+  struct Out {
+    AxisVec p;
+    std::uint32_t line;
+    double s;
+  };
+
+  const Seg& seg(std::uint64_t i) const { return segs_[i % segs_.size()]; }
+  Seg& seg(std::uint64_t i) { return segs_[i % segs_.size()]; }
+  double joint_s(std::uint64_t i) const { return seg(i).geo.end_mm(); }
+  std::uint64_t seg_of(double s, std::uint64_t hint) const;
+  AxisVec point(double s, std::uint64_t segment) const;
+  double brake_distance(double d, double c) const;
+  void update_eff(std::uint64_t from);
+  bool can_brake(double s, double d, std::uint64_t segment) const;
+  bool step_ok(double s, std::uint64_t segment, double s2, std::uint64_t& seg2) const;
+  bool dynamics_ok(const AxisVec& p0, const AxisVec& p1, const AxisVec& p2) const;
+  void expand(const Node& n, std::size_t& count);
+  std::size_t brake_to_rest(Node n, bool record);
+  void offer(const Node& child);
+  void commit_lineage(std::uint64_t cycle, std::size_t i);
+  bool certify_and_emit(const Node& n);
+  void recover();
+  void retire();
+  void force_commit();
+  void find_coalescence();
+  std::size_t ancestor(std::size_t i, std::uint64_t cycle) const;
+  void emit(double s, std::uint64_t segment);
+  Hist& hist(std::uint64_t cycle, std::size_t i) {
+    return hist_[(cycle % hist_rows_) * beam_cap_ + i];
+  }
+  const Hist& hist(std::uint64_t cycle, std::size_t i) const {
+    return hist_[(cycle % hist_rows_) * beam_cap_ + i];
+  }
+  std::size_t& hist_count(std::uint64_t cycle) { return hist_n_[cycle % hist_rows_]; }
+
+  planner::Limits lim_;
+  SampleSearchOptions opt_;
+  double a_ = 0, normal_ = 0, resultant_ = 0;
+  std::array<double, kMaxAxes> axis_a_{}, axis_v_{};
+  double max_step_ = 0, reach_mm_ = 0, bin_w_ = 0;
+  std::size_t nbins_ = 0, beam_cap_ = 0, hist_rows_ = 0, cand_cap_ = 0;
+
+  std::vector<Seg> segs_;
+  std::uint64_t seg_base_ = 0, seg_end_ = 0;  // [base, end) held
+  bool program_ended_ = false;
+
+  std::vector<Node> beam_, bins_;   // live states; per bin the K farthest children
+  std::vector<std::size_t> bin_n_;  // children kept per bin
+  std::vector<double> cand_s_;      // one expansion's candidate landings
+  std::vector<Cand> cands_;         // … judged, then the feasible ones
+  std::vector<Hist> hist_;          // ring of rows: hist_rows_ × beam_cap_
+  std::vector<std::size_t> hist_n_;
+  std::vector<std::uint32_t> mark_, idx_a_, idx_b_;  // coalescence scratch
+  std::uint32_t stamp_ = 0;
+  std::vector<Node> trace_;  // a lineage, front to commit point
+
+  std::uint64_t front_ = 0;      // cycle of the beam
+  std::uint64_t committed_ = 0;  // newest committed cycle
+  Node last_commit_{};           // its state (sp, s, seg)
+  std::vector<Out> out_;
+  std::size_t out_head_ = 0, out_count_ = 0;
+  std::size_t out_reserve_ = 0;  // free output kept for a forced commit or a recovery's brake
+  bool finished_ = false, failed_ = false;
+  SampleSearchStats stats_;
+};
+
+}  // namespace cncore::motion
