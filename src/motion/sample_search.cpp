@@ -34,7 +34,7 @@ SampleSearch::SampleSearch(const planner::Limits& limits, const SampleSearchOpti
   nbins_ = static_cast<std::size_t>(max_step_ / bin_w_) + 2;
   beam_cap_ = nbins_ * opt_.per_bin;
   hist_rows_ = opt_.max_lag_cycles + 2 * kCoalesceEvery;
-  cand_cap_ = opt_.grid + 3 * opt_.joints_per_step;
+  cand_cap_ = opt_.grid + 1 + 4 * opt_.joints_per_step;
   // The brake from a state at the top speed takes max_step/a cycles plus a few at the caps.
   const auto brake_cycles = static_cast<std::size_t>(max_step_ / a_) + 64;
   const std::size_t out_cap = std::max(opt_.output_cycles, 2 * (hist_rows_ + brake_cycles));
@@ -69,15 +69,15 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
   Seg& g = seg(idx);
   g.geo = segment;
   const double m = opt_.limit_factor;
-  const double feed = segment.feed_pc > 0 ? segment.feed_pc : segment.vb_pc;
-  g.cap = m * std::min(feed, segment.vb_pc);
+  const double shape = shape_cap(segment);
+  g.cap = m * (segment.feed_pc > 0 ? std::min(segment.feed_pc, shape) : shape);
   g.joint_cap = a_;  // the window's end: a stop until the next segment arrives
   g.stop = true;
   g.hard_stop = stop_after;
   if (idx > 0) {
     Seg& prev = seg(idx - 1);
     if (!prev.hard_stop) {
-      prev.joint_cap = m * planner::joint_speed_pc(prev.geo, g.geo, lim_, false);
+      prev.joint_cap = m * corner_cap(prev.geo, g.geo);
       prev.stop = false;
     }
   }
@@ -93,6 +93,28 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
     emit(s0, 0);
   }
   return true;
+}
+
+// The checker's speed limit of a segment's shape: the feed or rapid rate, and √(R·Amax) on an
+// arc (R the smaller radius of a spiral). The planner's Vb is lower: it keeps room for the moving
+// average's ramp and the per-axis limits, which the search checks on the samples themselves.
+double SampleSearch::shape_cap(const planner::Segment& s) const {
+  double v = s.rapid ? lim_.rapid_pc : lim_.vmax_pc;
+  if (s.arc) v = std::min(v, std::sqrt(std::min(s.r0, s.r1) * lim_.amax_pc2));
+  return v;
+}
+
+// The checker's passing speed of a joint: both shapes' limits and the turn within one cycle,
+// Vg = Amax·τ/(2 sin(θ/2)) = Amax·τ/|S − E| with S, E the unit tangents.
+double SampleSearch::corner_cap(const planner::Segment& a, const planner::Segment& b) const {
+  const Vec3 e = a.end_direction().xyz(), s = b.start_direction().xyz();
+  const double ne = norm(e), ns = norm(s);
+  double v = std::min(shape_cap(a), shape_cap(b));
+  if (ne > 0 && ns > 0) {
+    const double turn = norm((1.0 / ns) * s - (1.0 / ne) * e);
+    if (turn > 1e-12) v = std::min(v, lim_.amax_pc2 / turn);
+  }
+  return v;
 }
 
 bool SampleSearch::push(const Block& block) {
@@ -130,11 +152,15 @@ double SampleSearch::brake_distance(double d, double c) const {
 // crossing j, joint j+1 must still be met (the largest d with brake_distance(d, eff_{j+1}) <
 // room, by bisection).
 void SampleSearch::update_eff(std::uint64_t last) {
+  // A stop must be landed on exactly: the step after it is 0, so braking counts down to 0
+  // there (with the cap a instead, a state at 1.9·a a few µm before the end passed the guide
+  // and could only land by slowing to rest short of it and creeping on).
+  auto own = [](const Seg& g) { return g.stop ? 0.0 : std::min(g.joint_cap, g.cap); };
   Seg& l = seg(last);
-  l.eff = std::min(l.joint_cap, l.cap);
+  l.eff = own(l);
   for (std::uint64_t j = last; j-- > seg_base_;) {
     Seg& g = seg(j);
-    double eff = std::min(g.joint_cap, g.cap);
+    double eff = own(g);
     const double next = seg(j + 1).eff;
     const double room = joint_s(j + 1) - joint_s(j);
     if (brake_distance(eff, next) >= room) {
@@ -198,9 +224,9 @@ bool SampleSearch::step_ok(double s, std::uint64_t segment, double s2, std::uint
       break;
     }
     if (j + 1 < seg_end_) cap = std::min(cap, seg(j + 1).cap);
-    if (d > cap) return false;
+    if (d > cap + kRound) return false;  // (s + cap − s: ulps of s)
   }
-  if (d > cap) return false;
+  if (d > cap + kRound) return false;  // (s + cap − s: ulps of s)
   seg2 = seg_of(s2, std::min(j, seg_end_ - 1));
   return true;
 }
@@ -221,7 +247,9 @@ bool SampleSearch::dynamics_ok(const AxisVec& p0, const AxisVec& p1, const AxisV
 
 // The feasible next landings of state n into cands_[0, count): a grid over [d − a, d + a], every
 // joint in reach (on it, just before it, and the largest step the caps crossed so far allow),
-// and the boundary of the dynamic rules between a feasible and a rejected candidate (bisection).
+// and the boundary of the dynamic rules and the guide between a feasible and a rejected
+// candidate (bisection). The guide's boundary is the braking curve to the next cap: without it
+// the grid brakes up to a/4 early every cycle.
 void SampleSearch::expand(const Node& n, std::size_t& count) {
   const double s = n.s, d = n.s - n.sp;
   const AxisVec p0 = point(n.sp, seg_of(n.sp, n.seg));
@@ -234,7 +262,10 @@ void SampleSearch::expand(const Node& n, std::size_t& count) {
                       : hi;
     cand_s_[nc++] = s + x;
   }
-  double cum = std::numeric_limits<double>::infinity();
+  // The largest step the caps allow, as far as it goes: without it a grid that misses the
+  // feed's step by a fraction of a leaves the tool below the feed on a long move.
+  double cum = seg(n.seg).cap;
+  if (cum >= lo) cand_s_[nc++] = s + std::min(cum, hi);
   std::size_t joints = 0;
   for (std::uint64_t j = n.seg; j < seg_end_ && joints < opt_.joints_per_step; ++j) {
     const Seg& g = seg(j);
@@ -249,6 +280,8 @@ void SampleSearch::expand(const Node& n, std::size_t& count) {
     cum = std::min(cum, g.joint_cap);
     if (s + cum >= js) cand_s_[nc++] = s + std::min(cum, hi);
     if (g.stop) break;
+    if (j + 1 < seg_end_) cum = std::min(cum, seg(j + 1).cap);  // past the joint: the next cap
+    if (s + cum > js && cum >= lo) cand_s_[nc++] = s + std::min(cum, hi);
   }
   std::sort(cand_s_.begin(), cand_s_.begin() + static_cast<std::ptrdiff_t>(nc));
   nc = static_cast<std::size_t>(
@@ -260,7 +293,8 @@ void SampleSearch::expand(const Node& n, std::size_t& count) {
     const double d2 = s2 - s;
     if (d2 < lo - kRound || d2 > hi + kRound) continue;  // s + x − s: ulps of s
     Cand c{s2, n.seg, 0};
-    if (step_ok(s, n.seg, s2, c.seg2)) c.ok = dynamics_ok(p0, p1, point(s2, c.seg2)) ? 1 : -1;
+    if (step_ok(s, n.seg, s2, c.seg2))
+      c.ok = dynamics_ok(p0, p1, point(s2, c.seg2)) && can_brake(s2, d2, c.seg2) ? 1 : -1;
     cands_[ne++] = c;
   }
   const std::size_t base = ne;
@@ -274,7 +308,8 @@ void SampleSearch::expand(const Node& n, std::size_t& count) {
       for (int it = 0; it < opt_.bisect; ++it) {
         const double mid = 0.5 * (g + b);
         std::uint64_t mseg = 0;
-        if (step_ok(s, n.seg, mid, mseg) && dynamics_ok(p0, p1, point(mid, mseg))) {
+        if (step_ok(s, n.seg, mid, mseg) && dynamics_ok(p0, p1, point(mid, mseg)) &&
+            can_brake(mid, mid - s, mseg)) {
           g = mid;
           gseg = mseg;
         } else {
@@ -497,7 +532,6 @@ bool SampleSearch::advance() {
         }
         continue;
       }
-      if (!can_brake(c.s2, d2, c.seg2)) continue;
       offer(Node{nd.s, c.s2, c.seg2, static_cast<std::int32_t>(bi)});
     }
   }

@@ -17,8 +17,10 @@
 //
 // Rules of a step from s to s2 (every limit scaled by limit_factor, in mm per cycle or cycle²):
 //   - |d2 − d1| ≤ a on the path (tangential), d ≥ 0, and the motion starts at rest;
-//   - the step of the first sample at or past a joint ≤ the joint's Vg (planner::joint_speed_pc);
-//   - every step ≤ the speed limit (F at 100 %, Vb) of each segment it touches;
+//   - the step of the first sample at or past a joint ≤ the joint's Vg (the checker's: both
+//     shapes' limits and Amax·τ/(2 sin(θ/2)));
+//   - every step ≤ the speed limit (F at 100 %, the feed or rapid rate, √(R·Amax) on an arc) of
+//     each segment it touches;
 //   - normal: √(l1·l2)·|d̂2 − d̂1| ≤ a over consecutive XYZ chords; per-axis speed and
 //     acceleration by finite differences; the resultant |Δ²P| ≤ a when the limits bound it;
 //   - stops (exact stop, the end): a sample lands exactly on the stop point with a step ≤ a and
@@ -129,6 +131,8 @@ class SampleSearch {
   std::uint64_t seg_of(double s, std::uint64_t hint) const;
   AxisVec point(double s, std::uint64_t segment) const;
   double brake_distance(double d, double c) const;
+  double shape_cap(const planner::Segment& s) const;
+  double corner_cap(const planner::Segment& a, const planner::Segment& b) const;
   void update_eff(std::uint64_t from);
   bool can_brake(double s, double d, std::uint64_t segment) const;
   bool step_ok(double s, std::uint64_t segment, double s2, std::uint64_t& seg2) const;
