@@ -800,6 +800,7 @@ std::vector<double> module_search(const std::vector<cncore::Block>& blocks,
       ss.end_of_program();
       ended = true;
     }
+    if (ss.at_stop() && ss.ready() == 0) ss.resume();  // released at once
     const bool moved = ss.advance();
     std::size_t popped = 0;
     while (ss.pop(p, line, sm)) {

@@ -13,6 +13,7 @@ namespace {
 constexpr double kWindow = 1e-5;  // mm before a joint where no sample lands (checker's snap)
 constexpr double kRound = 1e-9;   // mm of rounding allowed on a step's range
 constexpr std::size_t kCoalesceEvery = 8;  // cycles between searches for the commit point
+constexpr double kInf = std::numeric_limits<double>::infinity();
 }  // namespace
 
 SampleSearch::SampleSearch(const planner::Limits& limits, const SampleSearchOptions& options)
@@ -52,6 +53,7 @@ SampleSearch::SampleSearch(const planner::Limits& limits, const SampleSearchOpti
   idx_b_.resize(beam_cap_);
   trace_.resize(hist_rows_ + 1);
   out_.resize(out_cap);
+  hard_q_.resize(opt_.window_segments);
   out_reserve_ = hist_rows_ + brake_cycles;
 }
 
@@ -69,11 +71,11 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
   Seg& g = seg(idx);
   g.geo = segment;
   const double m = opt_.limit_factor;
-  const double shape = shape_cap(segment);
-  g.cap = m * (segment.feed_pc > 0 ? std::min(segment.feed_pc, shape) : shape);
+  g.shape = m * shape_cap(segment);
+  g.feed = segment.feed_pc > 0 ? m * segment.feed_pc : kInf;
   g.joint_cap = a_;  // the window's end: a stop until the next segment arrives
   g.stop = true;
-  g.hard_stop = stop_after;
+  g.hard_stop = false;
   if (idx > 0) {
     Seg& prev = seg(idx - 1);
     if (!prev.hard_stop) {
@@ -83,6 +85,7 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
   }
   ++seg_end_;
   update_eff(idx);
+  if (stop_after) mark_stop();
   if (idx == 0) {
     // The tool rests at the first segment's start: cycle 0.
     const double s0 = segment.s0_mm;
@@ -90,6 +93,7 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
     hist(0, 0) = {s0, -1};
     hist_count(0) = 1;
     last_commit_ = beam_[0];
+    popped_s_ = popped_sp_ = s0;
     emit(s0, 0);
   }
   return true;
@@ -120,10 +124,7 @@ double SampleSearch::corner_cap(const planner::Segment& a, const planner::Segmen
 bool SampleSearch::push(const Block& block) {
   if (block.kind == BlockKind::kDwell) return false;
   if (block.kind == BlockKind::kAux) {
-    if (block.aux_waits && seg_end_ > 0) {
-      Seg& last = seg(seg_end_ - 1);
-      last.hard_stop = true;  // (it is the window's end: already a stop)
-    }
+    if (block.aux_waits) mark_stop();
     return true;
   }
   if (!wants_segment()) return false;
@@ -151,16 +152,24 @@ double SampleSearch::brake_distance(double d, double c) const {
 // crossing step of joint j touches segment j, so it is below that segment's cap too, and after
 // crossing j, joint j+1 must still be met (the largest d with brake_distance(d, eff_{j+1}) <
 // room, by bisection).
-void SampleSearch::update_eff(std::uint64_t last) {
+void SampleSearch::update_eff(std::uint64_t last, bool all) {
   // A stop must be landed on exactly: the step after it is 0, so braking counts down to 0
   // there (with the cap a instead, a state at 1.9·a a few µm before the end passed the guide
   // and could only land by slowing to rest short of it and creeping on).
-  auto own = [](const Seg& g) { return g.stop ? 0.0 : std::min(g.joint_cap, g.cap); };
+  // Landing on joint j with step x, the next step (inside segment j+1) is ≥ x − a: so x ≤
+  // cap_{j+1} + a as well.
+  auto own = [&](std::uint64_t j) {
+    const Seg& g = seg(j);
+    if (g.stop) return 0.0;
+    double c = std::min(g.joint_cap, cap(g, or_));
+    if (j + 1 < seg_end_) c = std::min(c, cap(seg(j + 1), or_) + a_);
+    return c;
+  };
   Seg& l = seg(last);
-  l.eff = own(l);
+  l.eff = own(last);
   for (std::uint64_t j = last; j-- > seg_base_;) {
     Seg& g = seg(j);
-    double eff = own(g);
+    double eff = own(j);
     const double next = seg(j + 1).eff;
     const double room = joint_s(j + 1) - joint_s(j);
     if (brake_distance(eff, next) >= room) {
@@ -171,7 +180,7 @@ void SampleSearch::update_eff(std::uint64_t last) {
       }
       eff = lo;
     }
-    if (eff == g.eff && j + 1 < last) break;
+    if (eff == g.eff && j + 1 < last && !all) break;
     g.eff = eff;
   }
 }
@@ -191,6 +200,10 @@ AxisVec SampleSearch::point(double s, std::uint64_t segment) const {
 // The guide: a necessary condition to meet the caps ahead from a sample at s reached with step
 // d (each joint's effective cap on its own, exact for the tangential rule).
 bool SampleSearch::can_brake(double s, double d, std::uint64_t segment) const {
+  // After an override decrease: under the new cap when the ramp the checker allows ends.
+  if (guide_cycle_ < deadline_ &&
+      d - static_cast<double>(deadline_ - guide_cycle_) * a_ > cap(seg(segment), or_))
+    return false;
   const double free = brake_distance(d, 0);  // a joint farther than this never binds
   for (std::uint64_t j = segment, k = 0; j < seg_end_ && k < opt_.guide_joints; ++j, ++k) {
     const double js = joint_s(j);
@@ -207,7 +220,7 @@ bool SampleSearch::can_brake(double s, double d, std::uint64_t segment) const {
 bool SampleSearch::step_ok(double s, std::uint64_t segment, double s2, std::uint64_t& seg2) const {
   const double d = s2 - s;
   if (d < 0) return false;
-  double cap = seg(segment).cap;
+  double cap = this->cap(seg(segment), ratio_);
   std::uint64_t j = segment;
   for (; j < seg_end_; ++j) {
     const Seg& g = seg(j);
@@ -223,7 +236,7 @@ bool SampleSearch::step_ok(double s, std::uint64_t segment, double s2, std::uint
       ++j;
       break;
     }
-    if (j + 1 < seg_end_) cap = std::min(cap, seg(j + 1).cap);
+    if (j + 1 < seg_end_) cap = std::min(cap, this->cap(seg(j + 1), ratio_));
     if (d > cap + kRound) return false;  // (s + cap − s: ulps of s)
   }
   if (d > cap + kRound) return false;  // (s + cap − s: ulps of s)
@@ -250,7 +263,7 @@ bool SampleSearch::dynamics_ok(const AxisVec& p0, const AxisVec& p1, const AxisV
 // and the boundary of the dynamic rules and the guide between a feasible and a rejected
 // candidate (bisection). The guide's boundary is the braking curve to the next cap: without it
 // the grid brakes up to a/4 early every cycle.
-void SampleSearch::expand(const Node& n, std::size_t& count) {
+void SampleSearch::expand(const Node& n, std::size_t& count, bool guided) {
   const double s = n.s, d = n.s - n.sp;
   const AxisVec p0 = point(n.sp, seg_of(n.sp, n.seg));
   const AxisVec p1 = point(s, n.seg);
@@ -264,7 +277,7 @@ void SampleSearch::expand(const Node& n, std::size_t& count) {
   }
   // The largest step the caps allow, as far as it goes: without it a grid that misses the
   // feed's step by a fraction of a leaves the tool below the feed on a long move.
-  double cum = seg(n.seg).cap;
+  double cum = cap(seg(n.seg), ratio_);
   if (cum >= lo) cand_s_[nc++] = s + std::min(cum, hi);
   std::size_t joints = 0;
   for (std::uint64_t j = n.seg; j < seg_end_ && joints < opt_.joints_per_step; ++j) {
@@ -280,7 +293,7 @@ void SampleSearch::expand(const Node& n, std::size_t& count) {
     cum = std::min(cum, g.joint_cap);
     if (s + cum >= js) cand_s_[nc++] = s + std::min(cum, hi);
     if (g.stop) break;
-    if (j + 1 < seg_end_) cum = std::min(cum, seg(j + 1).cap);  // past the joint: the next cap
+    if (j + 1 < seg_end_) cum = std::min(cum, cap(seg(j + 1), ratio_));  // past the joint
     if (s + cum > js && cum >= lo) cand_s_[nc++] = s + std::min(cum, hi);
   }
   std::sort(cand_s_.begin(), cand_s_.begin() + static_cast<std::ptrdiff_t>(nc));
@@ -294,7 +307,8 @@ void SampleSearch::expand(const Node& n, std::size_t& count) {
     if (d2 < lo - kRound || d2 > hi + kRound) continue;  // s + x − s: ulps of s
     Cand c{s2, n.seg, 0};
     if (step_ok(s, n.seg, s2, c.seg2))
-      c.ok = dynamics_ok(p0, p1, point(s2, c.seg2)) && can_brake(s2, d2, c.seg2) ? 1 : -1;
+      c.ok =
+          dynamics_ok(p0, p1, point(s2, c.seg2)) && (!guided || can_brake(s2, d2, c.seg2)) ? 1 : -1;
     cands_[ne++] = c;
   }
   const std::size_t base = ne;
@@ -309,7 +323,7 @@ void SampleSearch::expand(const Node& n, std::size_t& count) {
         const double mid = 0.5 * (g + b);
         std::uint64_t mseg = 0;
         if (step_ok(s, n.seg, mid, mseg) && dynamics_ok(p0, p1, point(mid, mseg)) &&
-            can_brake(mid, mid - s, mseg)) {
+            (!guided || can_brake(mid, mid - s, mseg))) {
           g = mid;
           gseg = mseg;
         } else {
@@ -327,11 +341,12 @@ void SampleSearch::expand(const Node& n, std::size_t& count) {
 // The greedy brake: the smallest feasible step every cycle until the tool rests (step 0, or
 // the end point reached with a step ≤ a). Returns the cycles taken, 0 if it fails. With
 // `record`, each of its samples is committed.
-std::size_t SampleSearch::brake_to_rest(Node n, bool record) {
-  const double end = program_ended_ ? joint_s(seg_end_ - 1) : -1.0;
+std::size_t SampleSearch::brake_to_rest(Node n, std::uint64_t cycle, bool record) {
+  const double end = terminal();
   for (std::size_t k = 1; k < out_reserve_; ++k) {
     std::size_t count = 0;
-    expand(n, count);
+    ratio_ = ratio_at(cycle + k);
+    expand(n, count, false);  // the rules alone: a brake that comes to rest is a certificate
     const Cand* best = nullptr;
     for (std::size_t i = 0; i < count; ++i)
       if (!best || cands_[i].s2 < best->s2) best = &cands_[i];
@@ -381,6 +396,9 @@ bool SampleSearch::pop(AxisVec& position, std::uint32_t& line, double& s_mm) {
   position = o.p;
   line = o.line;
   s_mm = o.s;
+  popped_sp_ = popped_n_ > 0 ? popped_s_ : o.s;
+  popped_s_ = o.s;
+  ++popped_n_;
   out_head_ = (out_head_ + 1) % out_.size();
   --out_count_;
   return true;
@@ -388,7 +406,7 @@ bool SampleSearch::pop(AxisVec& position, std::uint32_t& line, double& s_mm) {
 
 // Commits the state n (the cycle after committed_) if the greedy brake brings it to rest.
 bool SampleSearch::certify_and_emit(const Node& n) {
-  const std::size_t k = brake_to_rest(n, false);
+  const std::size_t k = brake_to_rest(n, committed_ + 1, false);
   if (k == 0) {
     ++stats_.uncertified;
     return false;
@@ -421,7 +439,9 @@ void SampleSearch::commit_lineage(std::uint64_t cycle, std::size_t i) {
 }
 
 void SampleSearch::retire() {
-  while (seg_base_ + 1 < seg_end_ && seg(seg_base_).geo.end_mm() < last_commit_.sp) ++seg_base_;
+  // Behind the tool (the newest popped sample): a restart starts from there.
+  const double behind = std::min(last_commit_.sp, popped_sp_);
+  while (seg_base_ + 1 < seg_end_ && seg(seg_base_).geo.end_mm() < behind) ++seg_base_;
 }
 
 // The newest cycle from which every live state descends, by walking the live states' ancestors
@@ -467,7 +487,7 @@ void SampleSearch::force_commit() {
     const Hist& h = hist(c0, t);
     const double sp = hist(c0 - 1, static_cast<std::size_t>(h.parent)).s;
     const Node st{sp, h.s, seg_of(h.s, last_commit_.seg), -1};
-    if (brake_to_rest(st, false) > 0) target = t;
+    if (brake_to_rest(st, c0, false) > 0) target = t;
   }
   if (target == beam_cap_) {
     recover();
@@ -490,16 +510,20 @@ void SampleSearch::force_commit() {
 // newest committed state (which did), and the search starts again from rest.
 void SampleSearch::recover() {
   ++stats_.recoveries;
-  if (brake_to_rest(last_commit_, true) == 0) {
+  if (brake_to_rest(last_commit_, committed_, true) == 0) {
     failed_ = true;  // cannot happen: the state was certified by this very brake
     return;
   }
   front_ = committed_;
-  const double s = last_commit_.s;
-  if (program_ended_ && s == joint_s(seg_end_ - 1)) {
-    finished_ = true;
+  if (last_commit_.s == terminal()) {
+    reached_terminal();
     return;
   }
+  restart_at_rest();
+}
+
+void SampleSearch::restart_at_rest() {
+  const double s = last_commit_.s;
   last_commit_.sp = s;
   beam_.assign(1, Node{s, s, last_commit_.seg, 0});
   hist(front_, 0) = {s, -1};
@@ -507,14 +531,89 @@ void SampleSearch::recover() {
   retire();
 }
 
+double SampleSearch::terminal() const {
+  if (hard_n_ > 0) return joint_s(hard_q_[hard_head_]);
+  return program_ended_ && seg_end_ > 0 ? joint_s(seg_end_ - 1) : kInf;
+}
+
+void SampleSearch::reached_terminal() {
+  if (program_ended_ && last_commit_.s == joint_s(seg_end_ - 1)) {
+    finished_ = true;
+    return;
+  }
+  // One sample at rest on the stop: the tool has stopped there (the kernel handles the event
+  // then), and the plan after it starts from rest, not from the landing step.
+  at_stop_ = true;
+  last_commit_.sp = last_commit_.s;
+  emit(last_commit_.s, last_commit_.seg);
+  front_ = ++committed_;
+}
+
+void SampleSearch::mark_stop() {
+  if (seg_end_ == 0) return;
+  const std::uint64_t last = seg_end_ - 1;
+  Seg& l = seg(last);
+  if (l.hard_stop) return;
+  l.hard_stop = true;
+  hard_q_[(hard_head_ + hard_n_) % hard_q_.size()] = last;
+  ++hard_n_;
+}
+
+void SampleSearch::resume() {
+  if (!at_stop_) return;
+  at_stop_ = false;
+  while (hard_n_ > 0 && joint_s(hard_q_[hard_head_]) <= last_commit_.s) {
+    hard_head_ = (hard_head_ + 1) % hard_q_.size();
+    --hard_n_;
+  }
+  front_ = committed_;
+  restart_at_rest();
+}
+
+double SampleSearch::ratio_at(std::uint64_t cycle) const {
+  return cycle < deadline_ ? std::max(or_old_, or_) : or_;
+}
+
+void SampleSearch::restart(double ratio, std::size_t ramp_cycles) {
+  ++stats_.restarts;
+  const std::uint64_t c = popped_n_ > 0 ? popped_n_ - 1 : 0;
+  const double in_force = ratio_at(c + 1);
+  if (ratio >= in_force) {
+    deadline_ = 0;
+  } else {
+    // A decrease: the checker lets the old limit stand for one ramp; by then the speed must be
+    // under the new one (the guide's deadline rule).
+    if (ratio < or_) deadline_ = std::max(deadline_, c + 1 + ramp_cycles);
+    or_old_ = in_force;
+  }
+  or_ = ratio;
+  out_count_ = 0;
+  committed_ = front_ = c;
+  last_commit_ = Node{popped_sp_, popped_s_, seg_of(popped_s_, last_commit_.seg), 0};
+  beam_.assign(1, last_commit_);
+  hist(front_, 0) = {popped_s_, -1};
+  hist_count(front_) = 1;
+  if (seg_end_ > 0) update_eff(seg_end_ - 1, true);
+  finished_ = false;
+  at_stop_ = false;
+}
+
+void SampleSearch::brake_now() {
+  restart(or_, 0);
+  recover();
+}
+
 bool SampleSearch::advance() {
-  if (finished_ || failed_ || seg_end_ == 0) return false;
+  if (finished_ || failed_ || at_stop_ || seg_end_ == 0) return false;
   if (out_.size() - out_count_ < out_reserve_) return false;
   double far = 0;
   for (const Node& n : beam_) far = std::max(far, n.s);
   const double window_end = joint_s(seg_end_ - 1);
-  if (!program_ended_ && far + reach_mm_ >= window_end) return false;
-  const double end = program_ended_ ? window_end : std::numeric_limits<double>::infinity();
+  const double end = terminal();
+  // Without a stop ahead the front keeps a braking distance from the window's end.
+  if (end == kInf && far + reach_mm_ >= window_end) return false;
+  ratio_ = ratio_at(front_ + 1);
+  guide_cycle_ = front_ + 1;
 
   std::fill(bin_n_.begin(), bin_n_.end(), 0);
   std::int64_t done = -1;
@@ -538,7 +637,7 @@ bool SampleSearch::advance() {
   stats_.expanded += beam_.size();
   ++stats_.cycles;
   if (done >= 0) {
-    // The end point: commit the lineage to it (it ends at rest, so needs no brake).
+    // The end point or a stop: commit the lineage to it (it ends at rest: no brake needed).
     auto i = static_cast<std::size_t>(done);
     const auto len = static_cast<std::size_t>(front_ - committed_);
     for (std::size_t k = len; k-- > 0;) {
@@ -550,10 +649,10 @@ bool SampleSearch::advance() {
       last_commit_ = Node{last_commit_.s, trace_[k].s, seg_of(trace_[k].s, last_commit_.seg), -1};
       emit(last_commit_.s, last_commit_.seg);
     }
-    last_commit_ = Node{last_commit_.s, end, seg_end_ - 1, -1};
-    emit(end, seg_end_ - 1);
+    last_commit_ = Node{last_commit_.s, end, seg_of(end, last_commit_.seg), -1};
+    emit(end, last_commit_.seg);
     committed_ = front_ = front_ + 1;
-    finished_ = true;
+    reached_terminal();
     return true;
   }
   std::size_t kept = 0;

@@ -62,6 +62,7 @@ struct SampleSearchStats {
   std::size_t recoveries = 0;   // deaths met by the brake to rest
   std::size_t uncertified = 0;  // coalesced states whose brake failed (met like a death)
   std::size_t longest_brake = 0;
+  std::size_t restarts = 0;  // restart() calls (override changes)
 };
 
 class SampleSearch {
@@ -81,6 +82,20 @@ class SampleSearch {
   bool push(const Block& block);
   // No more segments: the last one ends in a stop.
   void end_of_program();
+  // The tool must stop at the end of the last segment pushed (an exact stop, a dwell, an event
+  // that waits). The search ends its plan there and waits for resume().
+  void mark_stop();
+  // At rest on a stop (at_stop()): plan on from there.
+  void resume();
+  bool at_stop() const { return at_stop_; }
+
+  // From the newest popped sample, plan again with the feed override `ratio` (1 = 100 %): the
+  // samples committed and not popped are dropped. After a decrease the old override stands for
+  // `ramp_cycles` (the checker's allowance), by which time the speed is under the new one.
+  void restart(double ratio, std::size_t ramp_cycles);
+  // Feed hold: drop what is planned and brake to rest from the newest popped sample (the
+  // greedy brake), then plan on from rest.
+  void brake_now();
 
   // Searches one more cycle at the front (planning time, not the cycle). Returns false when it
   // cannot: it waits for segments (the front must stay a braking distance before the window's
@@ -113,10 +128,11 @@ class SampleSearch {
   };
   struct Seg {
     planner::Segment geo;
-    double cap = 0;          // largest step inside it (mm/cycle)
-    double joint_cap = 0;    // largest step that crosses its end
-    double eff = 0;          // joint cap for the backward guide (≤ joint_cap)
-    bool stop = false;       // its end is a stop (exact stop, the end, or the window's end)
+    double feed = 0;       // its feed step at 100 % (mm/cycle, × limit_factor; ∞: none)
+    double shape = 0;      // the shape's limit (feed or rapid rate, √(R·Amax)), × limit_factor
+    double joint_cap = 0;  // largest step that crosses its end
+    double eff = 0;        // joint cap for the backward guide (≤ joint_cap)
+    bool stop = false;     // its end is a stop (exact stop, the end, or the window's end)
     bool hard_stop = false;  // an exact stop (stays one when the next segment arrives)
   };
   struct Out {
@@ -131,14 +147,20 @@ class SampleSearch {
   std::uint64_t seg_of(double s, std::uint64_t hint) const;
   AxisVec point(double s, std::uint64_t segment) const;
   double brake_distance(double d, double c) const;
+  // Largest step inside segment g at override ratio r.
+  static double cap(const Seg& g, double r) { return std::min(g.feed * r, g.shape); }
+  double ratio_at(std::uint64_t cycle) const;
+  double terminal() const;
+  void reached_terminal();
+  void restart_at_rest();
   double shape_cap(const planner::Segment& s) const;
   double corner_cap(const planner::Segment& a, const planner::Segment& b) const;
-  void update_eff(std::uint64_t from);
+  void update_eff(std::uint64_t last, bool all = false);
   bool can_brake(double s, double d, std::uint64_t segment) const;
   bool step_ok(double s, std::uint64_t segment, double s2, std::uint64_t& seg2) const;
   bool dynamics_ok(const AxisVec& p0, const AxisVec& p1, const AxisVec& p2) const;
-  void expand(const Node& n, std::size_t& count);
-  std::size_t brake_to_rest(Node n, bool record);
+  void expand(const Node& n, std::size_t& count, bool guided = true);
+  std::size_t brake_to_rest(Node n, std::uint64_t cycle, bool record);
   void offer(const Node& child);
   void commit_lineage(std::uint64_t cycle, std::size_t i);
   bool certify_and_emit(const Node& n);
@@ -183,7 +205,15 @@ class SampleSearch {
   std::vector<Out> out_;
   std::size_t out_head_ = 0, out_count_ = 0;
   std::size_t out_reserve_ = 0;  // free output kept for a forced commit or a recovery's brake
-  bool finished_ = false, failed_ = false;
+  bool finished_ = false, failed_ = false, at_stop_ = false;
+  std::vector<std::uint64_t> hard_q_;  // segments ending in a stop, ahead of the tool
+  std::size_t hard_head_ = 0, hard_n_ = 0;
+  double or_ = 1, or_old_ = 1;     // planned override; the one before a decrease
+  std::uint64_t deadline_ = 0;     // until this cycle the larger of the two stands
+  double ratio_ = 1;               // override of the steps being judged (ratio_at their cycle)
+  std::uint64_t guide_cycle_ = 0;  // cycle of the states the guide judges
+  double popped_s_ = 0, popped_sp_ = 0;  // the newest popped sample and the one before
+  std::uint64_t popped_n_ = 0;
   SampleSearchStats stats_;
 };
 

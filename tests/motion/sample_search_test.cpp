@@ -76,6 +76,7 @@ SearchRun run_search(const MachineConfig& m, const std::vector<Block>& blocks,
       ended = true;
     }
     long before = g_allocations.load();
+    if (ss.at_stop() && ss.ready() == 0) ss.resume();  // released at once
     const bool moved = ss.advance();
     r.allocations += g_allocations.load() - before;
     std::size_t popped = 0;
