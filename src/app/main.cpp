@@ -66,9 +66,9 @@ int main_cli(int argc, char** argv) {
       ->check(CLI::IsMember({"lookahead", "stop"}))
       ->type_name("MODE");
   run->add_option("--accdec", ra.accdec,
-                  "Look-ahead acc/dec type: acceleration or moving_average (default: the "
-                  "machine's [motion] accdec)")
-      ->check(CLI::IsMember({"acceleration", "moving_average"}))
+                  "Look-ahead acc/dec type: acceleration, moving_average or search (default: "
+                  "the machine's [motion] accdec)")
+      ->check(CLI::IsMember({"acceleration", "moving_average", "search"}))
       ->type_name("TYPE");
   run->add_option("--override", ra.override_pct, "Constant feed override, %")->type_name("PCT");
   run->add_option("--override-at", ra.override_at,

@@ -82,6 +82,7 @@ int command_run(const RunArgs& a) {
   options.kernel.mode = a.mode == "stop" ? motion::Mode::kStop : motion::Mode::kLookahead;
   if (!a.accdec.empty()) {
     options.kernel.accdec = a.accdec == "acceleration" ? motion::AccDecType::kAcceleration
+                            : a.accdec == "search"     ? motion::AccDecType::kSearch
                                                        : motion::AccDecType::kMovingAverage;
   }
   if (a.override_pct) {
@@ -190,7 +191,8 @@ int command_run(const RunArgs& a) {
   summary.set_accdec(options.kernel.mode == motion::Mode::kStop ||
                              options.kernel.accdec == motion::AccDecType::kMovingAverage
                          ? "moving_average"
-                         : "acceleration");
+                     : options.kernel.accdec == motion::AccDecType::kSearch ? "search"
+                                                                            : "acceleration");
   summary.set_operator_modes(options.operator_modes);
   ProgressObserver progress;
   std::vector<sim::SampleObserver*> observers{&summary};

@@ -110,9 +110,11 @@ void read_motion(const Reader& r, const toml::table& t, MachineConfig& c) {
         c.accdec = AccDecKind::kAcceleration;
       } else if (s != nullptr && s->get() == "moving_average") {
         c.accdec = AccDecKind::kMovingAverage;
+      } else if (s != nullptr && s->get() == "search") {
+        c.accdec = AccDecKind::kSearch;
       } else {
         r.fail(key.source(),
-               fmt::format("{} must be \"acceleration\" or \"moving_average\"", name));
+               fmt::format("{} must be \"acceleration\", \"moving_average\" or \"search\"", name));
       }
     } else {
       r.unknown(key, name);
@@ -552,10 +554,12 @@ std::string machine_config_to_toml(const MachineConfig& c) {
        "highest feed override accepted, % (100 … 1000)");
   line(fmt::format("bound_resultant_accel = {}", c.bound_resultant_accel),
        "arcs: true = tangential+normal resultant <= Amax; false = each <= Amax (seed)");
-  line(fmt::format("accdec = \"{}\"",
-                   c.accdec == AccDecKind::kAcceleration ? "acceleration" : "moving_average"),
+  line(fmt::format("accdec = \"{}\"", c.accdec == AccDecKind::kAcceleration ? "acceleration"
+                                      : c.accdec == AccDecKind::kSearch     ? "search"
+                                                                            : "moving_average"),
        "look-ahead acc/dec: \"acceleration\" = constant acceleration, a speed change takes "
-       "|dV|/Amax; \"moving_average\" = the seed's filter, every change takes T = Vmax/Amax");
+       "|dV|/Amax; \"moving_average\" = the seed's filter, every change takes T = Vmax/Amax; "
+       "\"search\" = samples searched ahead (no jerk limit or post filter)");
 
   o += "\n[interpreter]\n";
   line("max_loop_iterations = " + std::to_string(c.max_loop_iterations),

@@ -33,6 +33,7 @@ struct AxisConfig {
 enum class AccDecKind : std::uint8_t {
   kMovingAverage,  // "moving_average": the seed's look-ahead + moving average of T cycles
   kAcceleration,   // "acceleration": constant-acceleration planning before interpolation
+  kSearch,         // "search": samples searched ahead of the tool (no jerk limit, no filter)
 };
 
 enum class TableCancelMode : std::uint8_t {

@@ -28,6 +28,11 @@ class AccDec {
   // The successor b of motion item a (buffer index index_a) arrived: the joint is known.
   virtual void on_joint(std::uint64_t index_a, const planner::Segment& a,
                         const planner::Segment& b) = 0;
+  // A barrier (exact stop, dwell, waiting event) follows the last motion segment: the tool must
+  // stop at its end. (The acceleration types read it from CycleInput::stop_mm instead.)
+  virtual void on_barrier() {}
+  // No more blocks will come.
+  virtual void on_end_of_program() {}
   // Whether the acc/dec still needs buffer item `index` (the interpolator has passed it).
   virtual bool holds(std::uint64_t index) const = 0;
   // The buffer is full and its oldest item `index` is still held: keep what the acc/dec needs

@@ -5,10 +5,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <vector>
 
 #include "motion/accel_limited.hpp"
 #include "motion/moving_average.hpp"
+#include "motion/search_accdec.hpp"
 #include "planner/buffer.hpp"
 #include "planner/segment.hpp"
 #include "planner/turn_window.hpp"
@@ -20,16 +22,26 @@ using planner::Segment;
 
 KernelOptions kernel_options_for(const MachineConfig& machine) {
   KernelOptions o;
-  o.accdec = machine.accdec == AccDecKind::kAcceleration ? AccDecType::kAcceleration
-                                                         : AccDecType::kMovingAverage;
+  switch (machine.accdec) {
+    case AccDecKind::kAcceleration:
+      o.accdec = AccDecType::kAcceleration;
+      break;
+    case AccDecKind::kSearch:
+      o.accdec = AccDecType::kSearch;
+      break;
+    default:
+      o.accdec = AccDecType::kMovingAverage;
+  }
   o.bound_resultant_accel = machine.bound_resultant_accel;
   return o;
 }
 
 namespace {
 
+// The types that plan with constant acceleration (the acceleration type and the search): no
+// moving average, so no ramp terms in Vb and rapids at the configured rate.
 bool accel_type(const KernelOptions& o) {
-  return o.accdec == AccDecType::kAcceleration && o.mode == Mode::kLookahead;
+  return o.accdec != AccDecType::kMovingAverage && o.mode == Mode::kLookahead;
 }
 
 planner::Limits kernel_limits(const MachineConfig& m, const KernelOptions& o) {
@@ -50,6 +62,14 @@ planner::Limits segment_limits(const planner::Limits& lim, const KernelOptions& 
 
 std::unique_ptr<AccDec> make_accdec(const planner::SegmentBuffer& buf, const planner::Limits& lim,
                                     const KernelOptions& o, const MachineConfig& m) {
+  if (accel_type(o) && o.accdec == AccDecType::kSearch) {
+    if (lim.t2_cycles > 1 || lim.post_filter()) {
+      throw std::invalid_argument(
+          "acc/dec type \"search\" runs without a jerk limit and without a post filter (not "
+          "supported yet)");
+    }
+    return std::make_unique<SearchAccDec>(lim, std::max<std::size_t>(64, 2 * buf.capacity()));
+  }
   if (accel_type(o)) {
     return std::make_unique<AccelLimitedAccDec>(buf, lim, m.max_override_pct / 100.0,
                                                 o.check_reference_walk);
@@ -114,6 +134,7 @@ struct Kernel::Impl {
     events[(ev_head + ev_size) % events.size()] = idx;
     ++ev_size;
     if (ev.barrier) {
+      acc.on_barrier();
       barriers[(bq_head + bq_size) % barriers.size()] = idx;
       ++bq_size;
       barrier_since_motion = true;
@@ -462,6 +483,7 @@ void Kernel::push(const Block& block) {
   impl_->push(block);
 }
 void Kernel::end_of_program() {
+  if (!impl_->ended) impl_->acc.on_end_of_program();
   impl_->ended = true;
 }
 bool Kernel::step(Sample& out) {

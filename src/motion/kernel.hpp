@@ -22,6 +22,7 @@ enum class Mode : std::uint8_t {
 enum class AccDecType : std::uint8_t {
   kMovingAverage,  // the seed's: look-ahead limit + moving average of T (+ T2) cycles
   kAcceleration,   // issue 9: constant-acceleration planning before interpolation
+  kSearch,         // issue 9: samples searched ahead of the tool (motion/search_accdec.hpp)
 };
 
 struct KernelOptions {

@@ -95,6 +95,7 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
     last_commit_ = beam_[0];
     popped_s_ = popped_sp_ = s0;
     emit(s0, 0);
+    at_stop_ = stop_at_start_;
   }
   return true;
 }
@@ -201,9 +202,13 @@ AxisVec SampleSearch::point(double s, std::uint64_t segment) const {
 // d (each joint's effective cap on its own, exact for the tangential rule).
 bool SampleSearch::can_brake(double s, double d, std::uint64_t segment) const {
   // After an override decrease: under the new cap when the ramp the checker allows ends.
-  if (guide_cycle_ < deadline_ &&
-      d - static_cast<double>(deadline_ - guide_cycle_) * a_ > cap(seg(segment), or_))
-    return false;
+  for (std::size_t i = 0; i < allow_n_; ++i) {
+    const Allowance& w = allow_[i];
+    if (guide_cycle_ > w.until) continue;
+    const std::uint64_t k = w.until + 1;  // the first cycle without it
+    if (d - static_cast<double>(k - guide_cycle_) * a_ > cap(seg(segment), ratio_at(k)))
+      return false;
+  }
   const double free = brake_distance(d, 0);  // a joint farther than this never binds
   for (std::uint64_t j = segment, k = 0; j < seg_end_ && k < opt_.guide_joints; ++j, ++k) {
     const double js = joint_s(j);
@@ -230,6 +235,9 @@ bool SampleSearch::step_ok(double s, std::uint64_t segment, double s2, std::uint
       if (s2 > js - kWindow) return false;  // the checker might count the joint as reached
       break;
     }
+    // The window's end while more may come: a wall, never reached (a landing there could not
+    // know the corner after it).
+    if (g.stop && !g.hard_stop && !(program_ended_ && j + 1 == seg_end_)) return false;
     cap = std::min(cap, g.joint_cap);  // crossed (or landed on) joint j
     if (g.stop && s2 > js) return false;
     if (s2 == js) {
@@ -550,7 +558,10 @@ void SampleSearch::reached_terminal() {
 }
 
 void SampleSearch::mark_stop() {
-  if (seg_end_ == 0) return;
+  if (seg_end_ == 0) {
+    stop_at_start_ = true;  // a stop before any motion: wait at the start for resume()
+    return;
+  }
   const std::uint64_t last = seg_end_ - 1;
   Seg& l = seg(last);
   if (l.hard_stop) return;
@@ -571,31 +582,57 @@ void SampleSearch::resume() {
 }
 
 double SampleSearch::ratio_at(std::uint64_t cycle) const {
-  return cycle < deadline_ ? std::max(or_old_, or_) : or_;
+  double r = or_;
+  for (std::size_t i = 0; i < allow_n_; ++i)
+    if (cycle <= allow_[i].until) r = std::max(r, allow_[i].ratio);
+  return r;
 }
 
 void SampleSearch::restart(double ratio, std::size_t ramp_cycles) {
   ++stats_.restarts;
   const std::uint64_t c = popped_n_ > 0 ? popped_n_ - 1 : 0;
-  const double in_force = ratio_at(c + 1);
-  if (ratio >= in_force) {
-    deadline_ = 0;
-  } else {
-    // A decrease: the checker lets the old limit stand for one ramp; by then the speed must be
-    // under the new one (the guide's deadline rule).
-    if (ratio < or_) deadline_ = std::max(deadline_, c + 1 + ramp_cycles);
-    or_old_ = in_force;
+  // The checker judges a sample by the largest override among the samples of the last ramp:
+  // each override a decrease replaces stands until `ramp_cycles` after its last sample.
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < allow_n_; ++i)
+    if (allow_[i].until > c && allow_[i].ratio > ratio) allow_[n++] = allow_[i];
+  allow_n_ = n;
+  if (ramp_cycles > 0 && or_ > ratio) {
+    if (allow_n_ == allow_.size()) {
+      // Full: the one that expires first goes (less allowance: the plan brakes sooner).
+      std::size_t first = 0;
+      for (std::size_t i = 1; i < allow_n_; ++i)
+        if (allow_[i].until < allow_[first].until) first = i;
+      allow_[first] = allow_[--allow_n_];
+    }
+    allow_[allow_n_++] = {or_, c + ramp_cycles};
   }
   or_ = ratio;
+  if (seg_end_ > 0) update_eff(seg_end_ - 1, true);
+  // At rest on a stop or at the end, with nothing left to pop: the new override applies from
+  // the resume (planning now would move the tool while the kernel handles the stop's event).
+  if ((at_stop_ || finished_) && out_count_ == 0) return;
   out_count_ = 0;
   committed_ = front_ = c;
   last_commit_ = Node{popped_sp_, popped_s_, seg_of(popped_s_, last_commit_.seg), 0};
   beam_.assign(1, last_commit_);
   hist(front_, 0) = {popped_s_, -1};
   hist_count(front_) = 1;
-  if (seg_end_ > 0) update_eff(seg_end_ - 1, true);
   finished_ = false;
   at_stop_ = false;
+}
+
+void SampleSearch::idle() {
+  // Only at rest with nothing planned ahead: the root state just moves to the next cycle.
+  if (out_count_ != 0 || front_ != committed_ || last_commit_.sp != last_commit_.s) return;
+  ++popped_n_;
+  front_ = committed_ = popped_n_ - 1;
+  popped_sp_ = popped_s_;
+  if (!beam_.empty()) {
+    hist(front_, 0) = {last_commit_.s, -1};
+    hist_count(front_) = 1;
+    beam_.assign(1, Node{last_commit_.s, last_commit_.s, last_commit_.seg, 0});
+  }
 }
 
 void SampleSearch::brake_now() {
@@ -603,7 +640,7 @@ void SampleSearch::brake_now() {
   recover();
 }
 
-bool SampleSearch::advance() {
+bool SampleSearch::advance(bool near_window_end) {
   if (finished_ || failed_ || at_stop_ || seg_end_ == 0) return false;
   if (out_.size() - out_count_ < out_reserve_) return false;
   double far = 0;
@@ -611,7 +648,7 @@ bool SampleSearch::advance() {
   const double window_end = joint_s(seg_end_ - 1);
   const double end = terminal();
   // Without a stop ahead the front keeps a braking distance from the window's end.
-  if (end == kInf && far + reach_mm_ >= window_end) return false;
+  if (end == kInf && !near_window_end && far + reach_mm_ >= window_end) return false;
   ratio_ = ratio_at(front_ + 1);
   guide_cycle_ = front_ + 1;
 

@@ -31,6 +31,7 @@
 // arcs). The acceleration type does not use it yet.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -45,7 +46,7 @@ struct SampleSearchOptions {
   std::size_t window_segments = 8192;  // segments held ahead of the committed samples
   std::size_t per_bin = 1;             // K: states kept per speed bin
   double bins_per_a = 2;               // B: speed bins per a (bin width a/B)
-  std::size_t grid = 9;                // G: uniform candidate steps in [d − a, d + a]
+  std::size_t grid = 17;               // G: uniform candidate steps in [d − a, d + a]
   std::size_t joints_per_step = 32;    // joint candidates per expansion (more are not tried)
   std::size_t max_lag_cycles = 128;    // L: commits lag the front by at most this (+ 8)
   std::size_t output_cycles = 1024;    // committed samples waiting for pop()
@@ -93,14 +94,18 @@ class SampleSearch {
   // samples committed and not popped are dropped. After a decrease the old override stands for
   // `ramp_cycles` (the checker's allowance), by which time the speed is under the new one.
   void restart(double ratio, std::size_t ramp_cycles);
+  // A cycle passed without a sample (the tool rests on a stop, at the end or in a feed hold):
+  // the cycle count the override's ramp is timed by moves on.
+  void idle();
   // Feed hold: drop what is planned and brake to rest from the newest popped sample (the
   // greedy brake), then plan on from rest.
   void brake_now();
 
   // Searches one more cycle at the front (planning time, not the cycle). Returns false when it
-  // cannot: it waits for segments (the front must stay a braking distance before the window's
-  // end), the output ring is full, or the end point is committed.
-  bool advance();
+  // cannot: it waits for segments (the front stays a braking distance before the window's end
+  // unless near_window_end: then its states brake for it, as for a stop they never reach), the
+  // output ring is full, a stop or the end point is reached.
+  bool advance(bool near_window_end = false);
 
   // The next committed sample (the cycle's side: O(1), no allocation). False when none waits.
   bool pop(AxisVec& position, std::uint32_t& line, double& s_mm);
@@ -206,10 +211,17 @@ class SampleSearch {
   std::size_t out_head_ = 0, out_count_ = 0;
   std::size_t out_reserve_ = 0;  // free output kept for a forced commit or a recovery's brake
   bool finished_ = false, failed_ = false, at_stop_ = false;
+  bool stop_at_start_ = false;         // a stop (dwell, event) came before the first segment
   std::vector<std::uint64_t> hard_q_;  // segments ending in a stop, ahead of the tool
   std::size_t hard_head_ = 0, hard_n_ = 0;
-  double or_ = 1, or_old_ = 1;     // planned override; the one before a decrease
-  std::uint64_t deadline_ = 0;     // until this cycle the larger of the two stands
+  double or_ = 1;  // planned override
+  // Overrides replaced by a decrease, each standing until its cycle (the checker's ramp).
+  struct Allowance {
+    double ratio;
+    std::uint64_t until;
+  };
+  std::array<Allowance, 16> allow_{};
+  std::size_t allow_n_ = 0;
   double ratio_ = 1;               // override of the steps being judged (ratio_at their cycle)
   std::uint64_t guide_cycle_ = 0;  // cycle of the states the guide judges
   double popped_s_ = 0, popped_sp_ = 0;  // the newest popped sample and the one before
