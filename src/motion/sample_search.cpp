@@ -95,7 +95,6 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
     last_commit_ = beam_[0];
     popped_s_ = popped_sp_ = s0;
     emit(s0, 0);
-    at_stop_ = stop_at_start_;
   }
   return true;
 }
@@ -571,6 +570,10 @@ void SampleSearch::mark_stop() {
 }
 
 void SampleSearch::resume() {
+  if (stop_at_start_) {
+    stop_at_start_ = false;
+    return;
+  }
   if (!at_stop_) return;
   at_stop_ = false;
   while (hard_n_ > 0 && joint_s(hard_q_[hard_head_]) <= last_commit_.s) {
@@ -611,7 +614,7 @@ void SampleSearch::restart(double ratio, std::size_t ramp_cycles) {
   if (seg_end_ > 0) update_eff(seg_end_ - 1, true);
   // At rest on a stop or at the end, with nothing left to pop: the new override applies from
   // the resume (planning now would move the tool while the kernel handles the stop's event).
-  if ((at_stop_ || finished_) && out_count_ == 0) return;
+  if ((at_stop() || finished_) && out_count_ == 0) return;
   out_count_ = 0;
   committed_ = front_ = c;
   last_commit_ = Node{popped_sp_, popped_s_, seg_of(popped_s_, last_commit_.seg), 0};
@@ -641,7 +644,7 @@ void SampleSearch::brake_now() {
 }
 
 bool SampleSearch::advance(bool near_window_end) {
-  if (finished_ || failed_ || at_stop_ || seg_end_ == 0) return false;
+  if (finished_ || failed_ || at_stop() || seg_end_ == 0) return false;
   if (out_.size() - out_count_ < out_reserve_) return false;
   double far = 0;
   for (const Node& n : beam_) far = std::max(far, n.s);

@@ -88,7 +88,7 @@ class SampleSearch {
   void mark_stop();
   // At rest on a stop (at_stop()): plan on from there.
   void resume();
-  bool at_stop() const { return at_stop_; }
+  bool at_stop() const { return at_stop_ || stop_at_start_; }
 
   // From the newest popped sample, plan again with the feed override `ratio` (1 = 100 %): the
   // samples committed and not popped are dropped. After a decrease the old override stands for

@@ -135,6 +135,29 @@ TEST(SearchAccDec, DwellsExactStopsAndEventsStopTheTool) {
   EXPECT_TRUE(m8);
 }
 
+// A dwell or a waiting event before the first move: the tool waits for it at the start.
+TEST(SearchAccDec, DwellBeforeTheFirstMove) {
+  const MachineConfig m = test_machine();
+  // (At 50 % the override differs from the search's initial plan: its replan must keep the
+  // wait; it did not, in `cncore run`.)
+  for (const double override_pct : {100.0, 50.0}) {
+    for (const std::size_t feed_every : {0UL, 1UL}) {
+      Prog p;
+      p.dwell(0.01);
+      p.rapid_to(Vec3{0, 0, 5});
+      p.line_to(Vec3{5, 8, 5}, 400);
+      RunOpts o = search_opts();
+      o.kernel.override_pct = override_pct;
+      o.feed_every = feed_every;
+      const RunResult r = run_checked(m, p, o, "dwell first");
+      for (std::size_t i = 0; i <= 10 && i < r.samples.size(); ++i) {
+        EXPECT_EQ(r.samples[i].position[2], 0.0)
+            << "sample " << i << ", feed_every " << feed_every << ", " << override_pct << " %";
+      }
+    }
+  }
+}
+
 TEST(SearchAccDec, LateBlocksKeepEveryLimit) {
   MachineConfig m = test_machine();
   m.lookahead_blocks = 8;
