@@ -51,6 +51,9 @@ struct CorpusProgram {
   KnownViolation lookahead{};
   KnownViolation stop{};
   KnownViolation acceleration{};  // look-ahead with the acceleration-limited type (issue 9)
+  // Also run with the acc/dec type "search" (~20–40 µs of search per cycle): the programs of
+  // fewer than ~100 000 cycles.
+  bool search = false;
 };
 
 // The acceleration-limited type had per-axis violations at gentle corners passed while the speed
@@ -72,31 +75,31 @@ const CorpusProgram kPrograms[] = {
     {"camotics/locket_outside.ngc"},
     {"camotics/slant_test.nc"},
     {"camotics/tiny_cat_outline.ngc"},
-    {"camotics/vcarve.ngc"},
+    {"camotics/vcarve.ngc", true, {}, {}, {}, true},
     {"camotics/wave.gcode"},
     {"cncjs/arc-xz-plane.gcode"},
-    {"cncjs/arc-yz-plane.gcode"},
+    {"cncjs/arc-yz-plane.gcode", true, {}, {}, {}, true},
     {"cncjs/circle-inch.gcode"},
-    {"grbl/HelloWorld_cambam.nc"},
+    {"grbl/HelloWorld_cambam.nc", true, {}, {}, {}, true},
     {"grbl/SO2_helloworld.nc"},
-    {"grbl/braid_cut2d.nc"},
+    {"grbl/braid_cut2d.nc", true, {}, {}, {}, true},
     {"grbl/braid_test.gcode"},
-    {"linuxcnc-tp/arc_time.ngc"},
-    {"linuxcnc-tp/circle_small_segments_ncd.ngc"},
-    {"linuxcnc-tp/line-contouring-xz.ngc"},
-    {"linuxcnc-tp/short_segments_0.001.ngc"},
-    {"linuxcnc-tp/tight-corner-tolerance.ngc"},
-    {"linuxcnc-tp/zigzag_0.002_0.0005.ngc"},
-    {"linuxcnc/3dtest.ngc"},
+    {"linuxcnc-tp/arc_time.ngc", true, {}, {}, {}, true},
+    {"linuxcnc-tp/circle_small_segments_ncd.ngc", true, {}, {}, {}, true},
+    {"linuxcnc-tp/line-contouring-xz.ngc", true, {}, {}, {}, true},
+    {"linuxcnc-tp/short_segments_0.001.ngc", true, {}, {}, {}, true},
+    {"linuxcnc-tp/tight-corner-tolerance.ngc", true, {}, {}, {}, true},
+    {"linuxcnc-tp/zigzag_0.002_0.0005.ngc", true, {}, {}, {}, true},
+    {"linuxcnc/3dtest.ngc", true, {}, {}, {}, true},
     {"linuxcnc/arcspiral.ngc"},
     {"linuxcnc/factorial.ngc"},
     {"linuxcnc/flowsnake.ngc"},
     {"ugs/ShapeOko_Calibration_Pattern_01b.ngc"},
-    {"ugs/arc_rword_test.gcode"},
+    {"ugs/arc_rword_test.gcode", true, {}, {}, {}, true},
     {"ugs/enclosure.nc"},
     {"ugs/g17-g18-g19.gcode"},
     {"ugs/spiral.gcode"},
-    {"ugs/stress_test.gcode"},
+    {"ugs/stress_test.gcode", true, {}, {}, {}, true},
 };
 
 struct Case {
@@ -111,6 +114,7 @@ const char* case_suffix(const Case& c) {
   if (c.mode == Mode::kStop) return "stop";
   if (c.jerk) return "acceleration+jerk";
   if (c.post_filter) return "acceleration+post-filter";
+  if (c.accdec == AccDecType::kSearch) return "search";
   return c.accdec == AccDecType::kAcceleration ? "acceleration" : "lookahead";
 }
 
@@ -132,6 +136,7 @@ std::vector<Case> all_cases() {
     // programs of ~6 M cycles (15 s each).
     if (p.stop_mode) out.push_back({p, Mode::kLookahead, AccDecType::kAcceleration, false, true});
     if (p.stop_mode) out.push_back({p, Mode::kStop});
+    if (p.search) out.push_back({p, Mode::kLookahead, AccDecType::kSearch});
   }
   return out;
 }
@@ -172,6 +177,7 @@ TEST_P(CorpusRun, KeepsP1ToP4) {
   if (!fs::exists(path)) GTEST_SKIP() << "shared corpus not found: " << path;
   const KnownViolation& known = c.mode == Mode::kStop                    ? c.program.stop
                                 : c.accdec == AccDecType::kMovingAverage ? c.program.lookahead
+                                : c.accdec == AccDecType::kSearch        ? KnownViolation{}
                                                                          : c.program.acceleration;
   MachineConfig machine = default_machine_config();
   if (c.jerk) machine.max_jerk_mm_s3 = 1e6;          // T2 = ⌈2·Amax/(Jmax·τ)⌉ = 4 cycles
@@ -227,6 +233,7 @@ std::string case_name(const ::testing::TestParamInfo<Case>& info) {
   if (info.param.mode == Mode::kStop) return n + "_Stop";
   if (info.param.jerk) return n + "_AccelerationJerk";
   if (info.param.post_filter) return n + "_AccelerationPostFilter";
+  if (info.param.accdec == AccDecType::kSearch) return n + "_Search";
   return n + (info.param.accdec == AccDecType::kAcceleration ? "_Acceleration" : "_Lookahead");
 }
 
