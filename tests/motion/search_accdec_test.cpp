@@ -26,7 +26,7 @@ RunOpts search_opts() {
 }
 
 RunResult run_checked(const MachineConfig& m, const Prog& p, const RunOpts& o, const char* what) {
-  const RunResult r = run(m, p.blocks, o);
+  RunResult r = run(m, p.blocks, o);
   const auto rep = testing::check_trajectory(r.traj, p.blocks, testing::limits_from_config(m));
   EXPECT_TRUE(rep.ok()) << what << ": " << rep.summary();
   EXPECT_FALSE(r.samples.empty()) << what;
