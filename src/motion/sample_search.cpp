@@ -14,6 +14,7 @@ constexpr double kWindow = 1e-5;  // mm before a joint where no sample lands (ch
 constexpr double kRound = 1e-9;   // mm of rounding allowed on a step's range
 constexpr std::size_t kCoalesceEvery = 8;  // cycles between searches for the commit point
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kSharpTurn = 0.5;  // |S − E| of a sharp corner (θ ≈ 29°)
 }  // namespace
 
 SampleSearch::SampleSearch(const planner::Limits& limits, const SampleSearchOptions& options)
@@ -80,6 +81,9 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
     Seg& prev = seg(idx - 1);
     if (!prev.hard_stop) {
       prev.joint_cap = m * corner_cap(prev.geo, g.geo);
+      const Vec3 e = prev.geo.end_direction().xyz(), s = g.geo.start_direction().xyz();
+      const double ne = norm(e), ns = norm(s);
+      prev.sharp = ne > 0 && ns > 0 && norm((1.0 / ns) * s - (1.0 / ne) * e) > kSharpTurn;
       prev.stop = false;
     }
   }
@@ -213,7 +217,12 @@ bool SampleSearch::can_brake(double s, double d, std::uint64_t segment) const {
     const double js = joint_s(j);
     if (js <= s) continue;
     if (js - s > free) break;
-    if (brake_distance(d, seg(j).eff) >= js - s) return false;
+    // A sharp corner: the step before the crossing is held near the cap too (the turn is shared
+    // by the chords on both sides), so the braking ends one cap's step earlier. (A heuristic,
+    // not a necessary condition: the certification, not the guide, keeps the plan safe.)
+    const Seg& g = seg(j);
+    const double before = g.sharp ? g.eff : 0.0;
+    if (brake_distance(d, g.eff) + before >= js - s) return false;
   }
   return true;
 }

@@ -139,6 +139,7 @@ class SampleSearch {
     double eff = 0;        // joint cap for the backward guide (≤ joint_cap)
     bool stop = false;     // its end is a stop (exact stop, the end, or the window's end)
     bool hard_stop = false;  // an exact stop (stays one when the next segment arrives)
+    bool sharp = false;      // its end is a corner of more than ~29°
   };
   struct Out {
     AxisVec p;

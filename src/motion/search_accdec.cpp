@@ -28,6 +28,11 @@ void SearchAccDec::on_segment(std::uint64_t /*index*/, const planner::Segment& s
   if (!started_) {
     started_ = true;
     tool_mm_ = s.s0_mm;
+    // The search's first sample is the start, which the kernel has sent already (t = 0).
+    AxisVec p;
+    std::uint32_t line = 0;
+    double s0 = 0;
+    search_.pop(p, line, s0);
   }
 }
 

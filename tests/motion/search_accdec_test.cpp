@@ -65,7 +65,7 @@ Prog rounded_circle(double sweep_deg) {
   return p;
 }
 
-TEST(SearchAccDec, ExamplesKeepEveryLimitAndRunAboutAsFastAsTheAccelerationType) {
+TEST(SearchAccDec, ExamplesKeepEveryLimitAndAreNoSlowerThanTheAccelerationType) {
   const MachineConfig m = test_machine();
   struct Case {
     const char* name;
@@ -77,9 +77,10 @@ TEST(SearchAccDec, ExamplesKeepEveryLimitAndRunAboutAsFastAsTheAccelerationType)
     const RunResult r = run_checked(m, c.p, search_opts(), c.name);
     const std::size_t k = acceleration_cycles(m, c.p);
     std::printf("%s: search %zu cycles, acceleration type %zu\n", c.name, cycles(r), k);
-    // The contour example's 2 mm zig-zag: within 3 % (measured 4 177 cycles against 4 067: the
-    // search's narrow beam loses a few cycles at some of its 90° corners).
-    EXPECT_LE(static_cast<double>(cycles(r)), 1.03 * static_cast<double>(k)) << c.name;
+    // Measured: 746, 981 and 4 062 cycles against 750, 987 and 4 067 (before the guide braked
+    // to a sharp corner's cap one step early, the zig-zag took 4 177: narrow beams lost their
+    // states that braked latest).
+    EXPECT_LE(cycles(r), k) << c.name;
   }
 }
 
