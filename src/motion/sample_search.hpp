@@ -19,16 +19,16 @@
 //   - |d2 − d1| ≤ a on the path (tangential), d ≥ 0, and the motion starts at rest;
 //   - the step of the first sample at or past a joint ≤ the joint's Vg (the checker's: both
 //     shapes' limits and Amax·τ/(2 sin(θ/2)));
-//   - every step ≤ the speed limit (F at 100 %, the feed or rapid rate, √(R·Amax) on an arc) of
-//     each segment it touches;
+//   - every step ≤ the speed limit (F × the override, the feed or rapid rate, √(R·Amax) on an
+//     arc) of each segment it touches;
 //   - normal: √(l1·l2)·|d̂2 − d̂1| ≤ a over consecutive XYZ chords; per-axis speed and
 //     acceleration by finite differences; the resultant |Δ²P| ≤ a when the limits bound it;
-//   - stops (exact stop, the end): a sample lands exactly on the stop point with a step ≤ a and
-//     none passes it.
-// Not done (step 1 of the design): the feed override (planned at 100 %), feed hold, late blocks
-// and the filters (jerk stage, post filter), dwells and events, rotary-only segments, and the
-// kernel's own samples as a lineage of the beam (so it may be slower than the kernel on long
-// arcs). The acceleration type does not use it yet.
+//   - stops (exact stop, dwell, waiting event, the end): a sample lands exactly on the stop point
+//     with a step ≤ a, none passes it, and the plan waits there for resume();
+//   - the window's end while more may come: a wall no sample reaches.
+// The override (restart()), feed hold (brake_now()) and stops are handled here; the acc/dec type
+// "search" (search_accdec.hpp) wires them to the kernel. Not done: the filters (jerk stage, post
+// filter), rotary-only segments, and a hand-back to the acceleration type at speed.
 #pragma once
 
 #include <array>
