@@ -85,6 +85,13 @@ int command_run(const RunArgs& a) {
                             : a.accdec == "search"     ? motion::AccDecType::kSearch
                                                        : motion::AccDecType::kMovingAverage;
   }
+  if (options.kernel.mode == motion::Mode::kLookahead &&
+      options.kernel.accdec == motion::AccDecType::kSearch &&
+      (machine.max_jerk_mm_s3 > 0 || machine.post_filter_s > 0)) {
+    throw UsageError(
+        "acc/dec type \"search\" runs without a jerk limit and without a post filter: set "
+        "[motion] max_jerk_mm_s3 and post_filter_s to 0, or use --accdec acceleration");
+  }
   if (a.override_pct) {
     options.kernel.override_pct =
         override_value("--override", fmt::format("{}", *a.override_pct), machine.max_override_pct);

@@ -380,6 +380,19 @@ TEST_F(Cli, SummaryNamesTheAccDecType) {
   EXPECT_EQ(jm.at("accdec"), "moving_average");
   EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "s.json")).at("accdec"), "moving_average");
   EXPECT_LT(jd.at("cycle_time_s").get<double>(), jm.at("cycle_time_s").get<double>());
+  // The search type (issue 9): named, from the option and from the machine's key; no slower
+  // than the acceleration type on this example; refused with a jerk limit (usage error).
+  ASSERT_EQ(run("run " + p + " --accdec search --summary q.json").code, 0);
+  const auto jq = nlohmann::json::parse(slurp(dir_ / "q.json"));
+  EXPECT_EQ(jq.at("accdec"), "search");
+  EXPECT_LE(jq.at("cycle_time_s").get<double>(), jd.at("cycle_time_s").get<double>());
+  write_file(dir_ / "search.toml", "[motion]\naccdec = \"search\"\n");
+  ASSERT_EQ(run("run " + p + " --machine search.toml --summary k.json").code, 0);
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "k.json")).at("accdec"), "search");
+  write_file(dir_ / "jerk.toml", "[motion]\nmax_jerk_mm_s3 = 1000000\n");
+  const Result r = run("run " + p + " --accdec search --machine jerk.toml");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("without a jerk limit"), std::string::npos) << r.err;
 }
 
 TEST_F(Cli, OverrideColumnFollowsTheSteps) {
