@@ -261,17 +261,22 @@ bool SampleSearch::step_ok(double s, std::uint64_t segment, double s2, std::uint
 }
 
 bool SampleSearch::dynamics_ok(const AxisVec& p0, const AxisVec& p1, const AxisVec& p2) const {
+  // Each limit up to kRound: a step that brakes by exactly a along an axis whose limit is Amax
+  // reads a second difference of a ± ulps; compared strictly, braking at the full rate failed
+  // there, and the beam braked by the grid's next step, a/8 short, every cycle (a 90° corner
+  // on the built-in machine: 273 cycles where the acceleration type needs 250).
   const AxisVec c1 = p1 - p0, c2 = p2 - p1;
   for (std::size_t i = 0; i < kMaxAxes; ++i) {
-    if (axis_v_[i] > 0 && std::abs(c2[i]) > axis_v_[i]) return false;
-    if (axis_a_[i] > 0 && std::abs(c2[i] - c1[i]) > axis_a_[i]) return false;
+    if (axis_v_[i] > 0 && std::abs(c2[i]) > axis_v_[i] + kRound) return false;
+    if (axis_a_[i] > 0 && std::abs(c2[i] - c1[i]) > axis_a_[i] + kRound) return false;
   }
   const Vec3 d1 = c1.xyz(), d2 = c2.xyz();
   const double l1 = norm(d1), l2 = norm(d2);
   // Normal: √(l1·l2)·|d̂2 − d̂1| = 2·√(l1·l2)·sin(θ/2), the checker's a_n·τ².
-  if (l1 > 0 && l2 > 0 && std::sqrt(l1 * l2) * norm((1.0 / l2) * d2 - (1.0 / l1) * d1) > normal_)
+  if (l1 > 0 && l2 > 0 &&
+      std::sqrt(l1 * l2) * norm((1.0 / l2) * d2 - (1.0 / l1) * d1) > normal_ + kRound)
     return false;
-  return resultant_ <= 0 || norm(d2 - d1) <= resultant_;
+  return resultant_ <= 0 || norm(d2 - d1) <= resultant_ + kRound;
 }
 
 // The feasible next landings of state n into cands_[0, count): a grid over [d − a, d + a], every
