@@ -48,7 +48,6 @@ SampleSearch::SampleSearch(const planner::Limits& limits, const SampleSearchOpti
   cand_s_.resize(cand_cap_);
   cands_.resize(3 * cand_cap_);
   hist_.resize(hist_rows_ * beam_cap_);
-  hist_n_.assign(hist_rows_, 0);
   mark_.assign(beam_cap_, 0);
   idx_a_.resize(beam_cap_);
   idx_b_.resize(beam_cap_);
@@ -95,7 +94,6 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
     const double s0 = segment.s0_mm;
     beam_.assign(1, Node{s0, s0, 0, 0});
     hist(0, 0) = {s0, -1};
-    hist_count(0) = 1;
     last_commit_ = beam_[0];
     popped_s_ = popped_sp_ = s0;
     emit(s0, 0);
@@ -523,7 +521,6 @@ void SampleSearch::force_commit() {
     ++kept;
   }
   beam_.resize(kept);
-  hist_count(front_) = kept;
   find_coalescence();
 }
 
@@ -548,7 +545,6 @@ void SampleSearch::restart_at_rest() {
   last_commit_.sp = s;
   beam_.assign(1, Node{s, s, last_commit_.seg, 0});
   hist(front_, 0) = {s, -1};
-  hist_count(front_) = 1;
   retire();
 }
 
@@ -634,7 +630,6 @@ void SampleSearch::restart(double ratio, std::size_t ramp_cycles) {
   last_commit_ = Node{popped_sp_, popped_s_, seg_of(popped_s_, last_commit_.seg), 0};
   beam_.assign(1, last_commit_);
   hist(front_, 0) = {popped_s_, -1};
-  hist_count(front_) = 1;
   finished_ = false;
   at_stop_ = false;
 }
@@ -647,7 +642,6 @@ void SampleSearch::idle() {
   popped_sp_ = popped_s_;
   if (!beam_.empty()) {
     hist(front_, 0) = {last_commit_.s, -1};
-    hist_count(front_) = 1;
     beam_.assign(1, Node{last_commit_.s, last_commit_.s, last_commit_.seg, 0});
   }
 }
@@ -725,7 +719,6 @@ bool SampleSearch::advance(bool near_window_end) {
       beam_.back().parent = static_cast<std::int32_t>(beam_.size() - 1);
     }
   }
-  hist_count(front_) = beam_.size();
   stats_.max_beam = std::max(stats_.max_beam, beam_.size());
   if (front_ - committed_ > opt_.max_lag_cycles) {
     force_commit();

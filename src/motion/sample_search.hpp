@@ -182,7 +182,6 @@ class SampleSearch {
   const Hist& hist(std::uint64_t cycle, std::size_t i) const {
     return hist_[(cycle % hist_rows_) * beam_cap_ + i];
   }
-  std::size_t& hist_count(std::uint64_t cycle) { return hist_n_[cycle % hist_rows_]; }
 
   planner::Limits lim_;
   SampleSearchOptions opt_;
@@ -195,12 +194,11 @@ class SampleSearch {
   std::uint64_t seg_base_ = 0, seg_end_ = 0;  // [base, end) held
   bool program_ended_ = false;
 
-  std::vector<Node> beam_, bins_;   // live states; per bin the K farthest children
-  std::vector<std::size_t> bin_n_;  // children kept per bin
-  std::vector<double> cand_s_;      // one expansion's candidate landings
-  std::vector<Cand> cands_;         // … judged, then the feasible ones
-  std::vector<Hist> hist_;          // ring of rows: hist_rows_ × beam_cap_
-  std::vector<std::size_t> hist_n_;
+  std::vector<Node> beam_, bins_;                    // live states; per bin the K farthest children
+  std::vector<std::size_t> bin_n_;                   // children kept per bin
+  std::vector<double> cand_s_;                       // one expansion's candidate landings
+  std::vector<Cand> cands_;                          // … judged, then the feasible ones
+  std::vector<Hist> hist_;                           // ring of rows: hist_rows_ × beam_cap_
   std::vector<std::uint32_t> mark_, idx_a_, idx_b_;  // coalescence scratch
   std::uint32_t stamp_ = 0;
   std::vector<Node> trace_;  // a lineage, front to commit point

@@ -39,8 +39,6 @@ class SearchAccDec final : public AccDec {
   double commanded_mm() const override { return tool_mm_; }
   bool at_rest() const override { return step_pc_ == 0 && search_.ready() == 0; }
 
-  const SampleSearch& search() const { return search_; }
-
  private:
   SampleSearch search_;
   std::size_t ramp_cycles_ = 0;  // an override decrease's allowance (the checker's ramp)
