@@ -3,33 +3,16 @@
 // hold whatever the controller asks, and back-calculation still beats clamp after the jump.
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <new>
 #include <vector>
 
+#include "alloc_counter.hpp"
 #include "feedcontrol/adaptive_loop.hpp"
 #include "feedcontrol/adaptive_run.hpp"
 #include "motion/kernel.hpp"
 #include "scenario.hpp"
-
-// Counts every heap allocation in this test program (the real-time check below).
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-void* operator new(std::size_t n) {
-  ++g_allocations;
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
 
 using namespace cncore;
 using namespace cncore::feed;
@@ -161,7 +144,7 @@ TEST(KernelLoop, RunCycleControllerAllocatesNothingAndFollowsM52) {
   PlantLoad plant(sc::plant());
   feed::AdaptiveCycleController ctrl(m, sc::settings(AntiWindup::kBackCalculation), plant, "test");
   motion::Sample s;
-  const long before = g_allocations.load();
+  const long before = cncore::testing::allocations();
   std::uint64_t cycles = 0, off_cycles = 0, adapted_on_heavy_cut = 0;
   double x_off = -1, x_on = -1;
   while (kernel.step(s) && s.t_s < 60) {
@@ -176,7 +159,7 @@ TEST(KernelLoop, RunCycleControllerAllocatesNothingAndFollowsM52) {
     }
     if (x_on >= 0 && s.position[0] < 220 && o != 95) ++adapted_on_heavy_cut;
   }
-  const long allocations = g_allocations.load() - before;
+  const long allocations = cncore::testing::allocations() - before;
   EXPECT_GT(before, 0);  // the counter does count (the set-up above allocated)
   EXPECT_EQ(allocations, 0) << "over " << cycles << " cycles";
   EXPECT_NEAR(x_off, 110, 0.05);

@@ -1,30 +1,13 @@
 // The per-cycle driver: kernel samples in, override out; no heap allocation per cycle.
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <cstdlib>
-#include <new>
 
+#include "alloc_counter.hpp"
 #include "core/error.hpp"
 #include "feedcontrol/adaptive_loop.hpp"
 
 using namespace cncore::feed;
-
-// Counts every heap allocation in this test program.
-namespace {
-std::atomic<long> g_allocations{0};
-}
-void* operator new(std::size_t n) {
-  ++g_allocations;
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
 
 namespace {
 
@@ -122,7 +105,7 @@ TEST(Loop, NoHeapAllocationPerCycle) {
     AdaptiveFeedLoop from_file(s, 0.001, 200, rec);
     AdaptiveFeedLoop from_plant(s, 0.001, 200, plant);
     cncore::motion::Sample sample;
-    const long before = g_allocations.load();
+    const long before = cncore::testing::allocations();
     double ovr = 100;
     for (int n = 0; n < 4000; ++n) {
       sample.t_s = n * 0.001;
@@ -131,6 +114,6 @@ TEST(Loop, NoHeapAllocationPerCycle) {
       ovr = from_file.on_sample(sample, 100);
       ovr = from_plant.cycle(sample.t_s, n * 0.025, 15 * ovr, 100);
     }
-    EXPECT_EQ(g_allocations.load() - before, 0);
+    EXPECT_EQ(cncore::testing::allocations() - before, 0);
   }
 }

@@ -7,38 +7,16 @@
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>
 
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <new>
 #include <string>
 #include <vector>
 
+#include "alloc_counter.hpp"
 #include "motion_test_util.hpp"
 #include "program_gen_rc.hpp"
 #include "trajectory_checker.hpp"
-
-// Counts heap allocations in this test program (advance() and pop() must not allocate).
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-// (GCC sees the replaced new and delete inlined into RapidCheck's code and pairs malloc with
-// free across them as a mismatch: they are this pair.)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void* operator new(std::size_t n) {
-  ++g_allocations;
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
-#pragma GCC diagnostic pop
 
 namespace cncore::motion::test {
 namespace {
@@ -75,15 +53,15 @@ SearchRun run_search(const MachineConfig& m, const std::vector<Block>& blocks,
       ss.end_of_program();
       ended = true;
     }
-    long before = g_allocations.load();
+    long before = cncore::testing::allocations();
     if (ss.at_stop() && ss.ready() == 0) ss.resume();  // released at once
     const bool moved = ss.advance();
-    r.allocations += g_allocations.load() - before;
+    r.allocations += cncore::testing::allocations() - before;
     std::size_t popped = 0;
     for (;;) {
-      before = g_allocations.load();
+      before = cncore::testing::allocations();
       const bool got = ss.pop(p, line, s);
-      r.allocations += g_allocations.load() - before;
+      r.allocations += cncore::testing::allocations() - before;
       if (!got) break;
       r.traj.add(static_cast<double>(r.traj.size()) * m.period_s, line, p);
       ++popped;

@@ -1,28 +1,10 @@
 // The run streams: the heap allocations it makes do not depend on how long it runs.
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <cstdlib>
-#include <new>
 
+#include "alloc_counter.hpp"
 #include "helpers.hpp"
-
-namespace {
-std::atomic<std::size_t> g_allocations{0};
-}  // namespace
-
-// Counting global allocation functions for this test binary.
-void* operator new(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
 
 namespace cncore::tables::test {
 namespace {
@@ -41,13 +23,13 @@ std::size_t allocations_for(std::uint32_t reps, std::uint64_t& cycles) {
       parse_table("REF SPINDLE\nAXES Y\nCYCLIC\nL0 Y0\nL180 Y1\nL360 Y0\n", "y.tbl")};
   TablePlan plan = plan_tables(t, test_machine(), o);
   double max_x = 0;
-  std::size_t before = g_allocations.load();
+  const long before = cncore::testing::allocations();
   RunSummary s =
       run_tables(plan, [&](const TableSample& ts) { max_x = std::max(max_x, ts.position[kX]); });
-  std::size_t after = g_allocations.load();
+  const long after = cncore::testing::allocations();
   cycles = s.cycles;
   EXPECT_NEAR(max_x, 5, 0.01);
-  return after - before;
+  return static_cast<std::size_t>(after - before);
 }
 
 TEST(Streaming, AllocationsDoNotGrowWithTheRunLength) {
