@@ -14,6 +14,7 @@ constexpr double kWindow = 1e-5;  // mm before a joint where no sample lands (ch
 constexpr double kRound = 1e-9;   // mm of rounding allowed on a step's range
 constexpr std::size_t kCoalesceEvery = 8;  // cycles between searches for the commit point
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kFoldCos = -0.5;   // cos of a turn of 120°: a fold of the path onto itself
 constexpr double kSharpTurn = 0.5;  // |S − E| of a sharp corner (θ ≈ 29°)
 }  // namespace
 
@@ -76,6 +77,7 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
   g.joint_cap = a_;  // the window's end: a stop until the next segment arrives
   g.stop = true;
   g.hard_stop = false;
+  g.turn_cos = 1;
   if (idx > 0) {
     Seg& prev = seg(idx - 1);
     if (!prev.hard_stop) {
@@ -83,6 +85,7 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
       const Vec3 e = prev.geo.end_direction().xyz(), s = g.geo.start_direction().xyz();
       const double ne = norm(e), ns = norm(s);
       prev.sharp = ne > 0 && ns > 0 && norm((1.0 / ns) * s - (1.0 / ne) * e) > kSharpTurn;
+      prev.turn_cos = ne > 0 && ns > 0 ? dot(e, s) / (ne * ns) : 1.0;
       prev.stop = false;
     }
   }
@@ -225,10 +228,11 @@ bool SampleSearch::can_brake(double s, double d, std::uint64_t segment) const {
   return true;
 }
 
-// Static rules of a step from s (in `segment`) to s2: joints crossed, stops, segment caps and
-// the window before a joint. Writes the landing segment (a landing on a joint is held by the
-// segment after it).
-bool SampleSearch::step_ok(double s, std::uint64_t segment, double s2, std::uint64_t& seg2) const {
+// Static rules of a step from s (in `segment`, reached by a step d_in) to s2: joints crossed,
+// stops, segment caps, the window before a joint and folds. Writes the landing segment (a
+// landing on a joint is held by the segment after it).
+bool SampleSearch::step_ok(double s, double d_in, std::uint64_t segment, double s2,
+                           std::uint64_t& seg2) const {
   const double d = s2 - s;
   if (d < 0) return false;
   double cap = this->cap(seg(segment), ratio_);
@@ -246,6 +250,14 @@ bool SampleSearch::step_ok(double s, std::uint64_t segment, double s2, std::uint
     if (g.stop && !g.hard_stop && !(program_ended_ && j + 1 == seg_end_)) return false;
     cap = std::min(cap, g.joint_cap);  // crossed (or landed on) joint j
     if (g.stop && s2 > js) return false;
+    // A fold (a turn of more than 120°): the sample x = js − s before it also lies near the
+    // segment after it, where the checker may read it, (p − J)·S = x·(−c) past the joint, if
+    // that needs less speed around the sample: max(d_in + y, d − y) < max(d_in, d) with
+    // y = x·(1 − c). Then the crossing reads d − y, and the step after it, allowed d + a,
+    // exceeds the acceleration by y/τ² (a rest 15 nm before a reversal that a late block
+    // revealed: 2 030 mm/s² on 2 000). With d ≤ d_in + y that reading is never the cheaper one.
+    if (s2 > js && g.turn_cos < kFoldCos && d > d_in + (js - s) * (1 - g.turn_cos) - kRound)
+      return false;
     if (s2 == js) {
       ++j;
       break;
@@ -286,7 +298,18 @@ void SampleSearch::expand(const Node& n, std::size_t& count, bool guided) {
   const double s = n.s, d = n.s - n.sp;
   const AxisVec p0 = point(n.sp, seg_of(n.sp, n.seg));
   const AxisVec p1 = point(s, n.seg);
-  const double lo = std::max(0.0, d - a_), hi = d + a_;
+  double lo = std::max(0.0, d - a_);
+  const double hi = d + a_;
+  // Just past a fold crossed by the last step, x = s − js: the checker reads the sample on the
+  // segment before the fold first, y = x·(1 − c) short of ours, and keeps that reading unless
+  // ours needs less speed: max(d, d2) < max(d − y, d2 + y), i.e. d2 > d − y. (Read there, the
+  // step into it was d − y: 2 971 → 947 nm/cycle on a 1.08 µm reversal, 2 024 mm/s².)
+  if (n.seg > seg_base_) {
+    const Seg& f = seg(n.seg - 1);
+    const double js = f.geo.end_mm();
+    if (f.turn_cos < kFoldCos && n.sp < js && s > js)
+      lo = std::max(lo, d - (s - js) * (1 - f.turn_cos) + kRound);
+  }
   std::size_t nc = 0;
   for (std::size_t i = 0; i < opt_.grid; ++i) {
     const double x =
@@ -325,7 +348,7 @@ void SampleSearch::expand(const Node& n, std::size_t& count, bool guided) {
     const double d2 = s2 - s;
     if (d2 < lo - kRound || d2 > hi + kRound) continue;  // s + x − s: ulps of s
     Cand c{s2, n.seg, 0};
-    if (step_ok(s, n.seg, s2, c.seg2))
+    if (step_ok(s, d, n.seg, s2, c.seg2))
       c.ok =
           dynamics_ok(p0, p1, point(s2, c.seg2)) && (!guided || can_brake(s2, d2, c.seg2)) ? 1 : -1;
     cands_[ne++] = c;
@@ -341,7 +364,7 @@ void SampleSearch::expand(const Node& n, std::size_t& count, bool guided) {
       for (int it = 0; it < opt_.bisect; ++it) {
         const double mid = 0.5 * (g + b);
         std::uint64_t mseg = 0;
-        if (step_ok(s, n.seg, mid, mseg) && dynamics_ok(p0, p1, point(mid, mseg)) &&
+        if (step_ok(s, d, n.seg, mid, mseg) && dynamics_ok(p0, p1, point(mid, mseg)) &&
             (!guided || can_brake(mid, mid - s, mseg))) {
           g = mid;
           gseg = mseg;

@@ -140,6 +140,7 @@ class SampleSearch {
     bool stop = false;     // its end is a stop (exact stop, the end, or the window's end)
     bool hard_stop = false;  // an exact stop (stays one when the next segment arrives)
     bool sharp = false;      // its end is a corner of more than ~29°
+    double turn_cos = 1;     // cos of the turn at its end (1 until the next segment arrives)
   };
   struct Out {
     AxisVec p;
@@ -163,7 +164,7 @@ class SampleSearch {
   double corner_cap(const planner::Segment& a, const planner::Segment& b) const;
   void update_eff(std::uint64_t last, bool all = false);
   bool can_brake(double s, double d, std::uint64_t segment) const;
-  bool step_ok(double s, std::uint64_t segment, double s2, std::uint64_t& seg2) const;
+  bool step_ok(double s, double d_in, std::uint64_t segment, double s2, std::uint64_t& seg2) const;
   bool dynamics_ok(const AxisVec& p0, const AxisVec& p1, const AxisVec& p2) const;
   void expand(const Node& n, std::size_t& count, bool guided = true);
   std::size_t brake_to_rest(Node n, std::uint64_t cycle, bool record);
