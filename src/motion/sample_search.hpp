@@ -129,7 +129,7 @@ class SampleSearch {
   struct Cand {
     double s2;
     std::uint64_t seg2;
-    int ok;  // 1 feasible, 0 static rule fails, −1 dynamic rule fails
+    int ok;  // 2 feasible (both guides), 1 feasible (the loose guide only), −1 not
   };
   struct Seg {
     planner::Segment geo;
@@ -163,12 +163,12 @@ class SampleSearch {
   double shape_cap(const planner::Segment& s) const;
   double corner_cap(const planner::Segment& a, const planner::Segment& b) const;
   void update_eff(std::uint64_t last, bool all = false);
-  bool can_brake(double s, double d, std::uint64_t segment) const;
+  int can_brake(double s, double d, std::uint64_t segment) const;
   bool step_ok(double s, double d_in, std::uint64_t segment, double s2, std::uint64_t& seg2) const;
   bool dynamics_ok(const AxisVec& p0, const AxisVec& p1, const AxisVec& p2) const;
   void expand(const Node& n, std::size_t& count, bool guided = true);
   std::size_t brake_to_rest(Node n, std::uint64_t cycle, bool record);
-  void offer(const Node& child);
+  void offer(const Node& child, std::size_t cls);
   void commit_lineage(std::uint64_t cycle, std::size_t i);
   bool certify_and_emit(const Node& n);
   void recover();
