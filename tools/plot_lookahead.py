@@ -23,7 +23,7 @@ import os
 W, H = 720, 330
 LEFT, RIGHT, TOP, BOTTOM = 70, 16, 34, 46
 COLOURS = {"look-ahead": "#1f5fbf", "stop": "#c03020", "moving average": "#1f5fbf",
-           "acceleration": "#c03020"}
+           "acceleration": "#c03020", "search": "#2a9a40"}
 
 
 def read_positions(path):
@@ -123,11 +123,17 @@ def main():
     ap.add_argument("--labels", default="look-ahead,stop", metavar="A,B",
                     help="names of the two runs (e.g. 'moving average,acceleration')")
     ap.add_argument("--prefix", default="lookahead", help="file names PREFIX_speed/_accel.svg")
+    ap.add_argument("--extra", action="append", default=[], metavar="CSV:LABEL",
+                    help="a further run on the same plots (e.g. 'search.csv:search')")
     args = ap.parse_args()
     label_a, _, label_b = args.labels.partition(",")
 
     runs = []
-    for name, path in ((label_a, args.lookahead_csv), (label_b, args.stop_csv)):
+    inputs = [(label_a, args.lookahead_csv), (label_b, args.stop_csv)]
+    for item in args.extra:
+        path, _, name = item.rpartition(":")
+        inputs.append((name, path))
+    for name, path in inputs:
         ts, ps, _ = read_positions(path)
         _, v, a = speed_accel(ts, ps)
         runs.append((name, ts, v, a))
