@@ -213,7 +213,7 @@ TEST(RunProgram, HeapDoesNotGrowWithProgramLength) {
   ASSERT_EQ(n.blocks, static_cast<std::uint64_t>(kChords + 1));
   ASSERT_GT(probe.cycles, 100000u);
   ASSERT_GT(probe.early, 0u);
-  EXPECT_LE(probe.late_max, probe.early + 64 * 1024)
+  EXPECT_LE(probe.late_max, probe.early + std::size_t{64} * 1024)
       << "heap grew from " << probe.early << " to " << probe.late_max << " bytes";
 }
 
