@@ -7,6 +7,8 @@
 namespace cncore::motion {
 
 namespace {
+constexpr int kFrontCyclesPerCycle = 2;
+
 SampleSearchOptions search_options(std::size_t window_segments) {
   SampleSearchOptions o;
   o.window_segments = window_segments;
@@ -60,6 +62,11 @@ void SearchAccDec::step(const CycleInput& in) {
   if (!hold_) {
     // The kernel has handled the stop's event (its next stop lies ahead): plan on.
     if (search_.at_stop() && search_.ready() == 0 && in.stop_mm > tool_mm_) search_.resume();
+    // A few front cycles every cycle, so that the front gains on the tool (until the output
+    // ring or the window's end stops it) and the search's work is spread over the cycles; it
+    // came in bursts when the committed samples ran out (a worst cycle of 1.9 ms on random_2k).
+    for (int i = 0; i < kFrontCyclesPerCycle && search_.advance(false); ++i) {
+    }
     while (search_.ready() == 0 && search_.advance(false)) {
     }
     while (search_.ready() == 0 && search_.advance(true)) {
