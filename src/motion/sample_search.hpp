@@ -44,7 +44,7 @@ namespace cncore::motion {
 
 struct SampleSearchOptions {
   std::size_t window_segments = 8192;  // segments held ahead of the committed samples
-  std::size_t per_bin = 1;             // K: states kept per speed bin
+  std::size_t per_bin = 1;             // K: states kept per speed bin (and class of the guide)
   double bins_per_a = 2;               // B: speed bins per a (bin width a/B)
   std::size_t grid = 17;               // G: uniform candidate steps in [d − a, d + a]
   std::size_t joints_per_step = 32;    // joint candidates per expansion (more are not tried)
@@ -129,7 +129,7 @@ class SampleSearch {
   struct Cand {
     double s2;
     std::uint64_t seg2;
-    int ok;  // 2 feasible (both guides), 1 feasible (the loose guide only), −1 not
+    int ok;  // 2 feasible, 1 feasible without the guide's sharp term, −1 not, 0 a static rule fails
   };
   struct Seg {
     planner::Segment geo;
