@@ -17,8 +17,9 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // The beam keeps two classes of states, each K per speed bin: those that pass the guide with
 // its sharp-corner term and those that pass it only without (see can_brake()).
 constexpr std::size_t kClasses = 2;
-constexpr double kFoldCos = -0.5;   // cos of a turn of 120°: a fold of the path onto itself
-constexpr double kSharpTurn = 0.5;  // |S − E| of a sharp corner (θ ≈ 29°)
+constexpr double kFoldCos = -0.5;  // cos of a turn of 120°: a fold of the path onto itself
+// A sharp corner: |S − E| > 0.5 (θ ≈ 29°), i.e. cos θ < 1 − 0.5²/2 (|S − E|² = 2 − 2·cos θ).
+constexpr double kSharpCos = 0.875;
 }  // namespace
 
 SampleSearch::SampleSearch(const planner::Limits& limits, const SampleSearchOptions& options)
@@ -87,7 +88,6 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
       prev.joint_cap = m * corner_cap(prev.geo, g.geo);
       const Vec3 e = prev.geo.end_direction().xyz(), s = g.geo.start_direction().xyz();
       const double ne = norm(e), ns = norm(s);
-      prev.sharp = ne > 0 && ns > 0 && norm((1.0 / ns) * s - (1.0 / ne) * e) > kSharpTurn;
       prev.turn_cos = ne > 0 && ns > 0 ? dot(e, s) / (ne * ns) : 1.0;
       prev.stop = false;
     }
@@ -233,7 +233,7 @@ int SampleSearch::can_brake(double s, double d, std::uint64_t segment) const {
     const Seg& g = seg(j);
     const double need = brake_distance(d, g.eff);
     if (need >= js - s) return 0;
-    if (g.sharp && need + g.eff >= js - s) level = 1;
+    if (g.turn_cos < kSharpCos && need + g.eff >= js - s) level = 1;
   }
   return level;
 }
@@ -376,18 +376,22 @@ void SampleSearch::expand(const Node& n, std::size_t& count, bool guided) {
         if (good.ok < level || bad.ok == 0 || bad.ok >= level) continue;
         double g = good.s2, b = bad.s2;
         std::uint64_t gseg = good.seg2;
+        int glevel = good.ok;
         for (int it = 0; it < opt_.bisect; ++it) {
           const double mid = 0.5 * (g + b);
           std::uint64_t mseg = 0;
-          if (step_ok(s, d, n.seg, mid, mseg) && dynamics_ok(p0, p1, point(mid, mseg)) &&
-              (!guided || can_brake(mid, mid - s, mseg) >= level)) {
+          const int lv = step_ok(s, d, n.seg, mid, mseg) && dynamics_ok(p0, p1, point(mid, mseg))
+                             ? (guided ? can_brake(mid, mid - s, mseg) : 2)
+                             : 0;
+          if (lv >= level) {
             g = mid;
             gseg = mseg;
+            glevel = lv;
           } else {
             b = mid;
           }
         }
-        if (g != good.s2) cands_[ne++] = {g, gseg, guided ? can_brake(g, g - s, gseg) : 2};
+        if (g != good.s2) cands_[ne++] = {g, gseg, glevel};
       }
     }
   }

@@ -139,7 +139,6 @@ class SampleSearch {
     double eff = 0;        // joint cap for the backward guide (≤ joint_cap)
     bool stop = false;     // its end is a stop (exact stop, the end, or the window's end)
     bool hard_stop = false;  // an exact stop (stays one when the next segment arrives)
-    bool sharp = false;      // its end is a corner of more than ~29°
     double turn_cos = 1;     // cos of the turn at its end (1 until the next segment arrives)
   };
   struct Out {

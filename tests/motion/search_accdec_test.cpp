@@ -49,6 +49,13 @@ std::size_t acceleration_cycles(const MachineConfig& m, const Prog& p) {
   return cycles(run(m, p.blocks, o));
 }
 
+// The test machine with the built-in machine's axes: each axis's acceleration limit is Amax.
+MachineConfig amax_axes_machine() {
+  MachineConfig m = test_machine();
+  for (std::size_t i = 0; i < 3; ++i) m.axes[i].max_accel_mm_s2 = m.max_accel_mm_s2;
+  return m;
+}
+
 // circle_small_segments' staircase: 16 µm chords of a 1-inch circle, rounded to 4 decimals of an
 // inch.
 Prog rounded_circle(double sweep_deg) {
@@ -89,8 +96,7 @@ TEST(SearchAccDec, ExamplesKeepEveryLimitAndAreNoSlowerThanTheAccelerationType) 
 // and the search braked a/8 short every cycle: 273 cycles here against the acceleration type's
 // 250 (with the comparison up to rounding: 245).
 TEST(SearchAccDec, BrakingAlongAnAxisAtItsLimitIsNoSlowerThanTheAccelerationType) {
-  MachineConfig m = test_machine();
-  for (std::size_t i = 0; i < 3; ++i) m.axes[i].max_accel_mm_s2 = m.max_accel_mm_s2;
+  const MachineConfig m = amax_axes_machine();
   Prog p;
   p.line_to(Vec3{5, 0, 0}, 10000);
   p.line_to(Vec3{5, 1, 0}, 10000);
@@ -106,8 +112,7 @@ TEST(SearchAccDec, BrakingAlongAnAxisAtItsLimitIsNoSlowerThanTheAccelerationType
 // beam needs the states that fail only it: 519 cycles against the acceleration type's 508 while
 // the guide dropped them, 506 with them kept as a class of their own.
 TEST(SearchAccDec, ShortZigZagStrokesAreNoSlowerThanTheAccelerationType) {
-  MachineConfig m = test_machine();  // with the built-in machine's axes (Amax each)
-  for (std::size_t i = 0; i < 3; ++i) m.axes[i].max_accel_mm_s2 = m.max_accel_mm_s2;
+  const MachineConfig m = amax_axes_machine();
   Prog p;
   for (int k = 1; k <= 56; ++k)
     p.line_to(Vec3{0.0508 * k, k % 2 == 1 ? -0.0127 : 0.0127, 0}, 10000);
