@@ -280,23 +280,35 @@ bool SampleSearch::step_ok(double s, double d_in, std::uint64_t segment, double 
   return true;
 }
 
-bool SampleSearch::dynamics_ok(const AxisVec& p0, const AxisVec& p1, const AxisVec& p2) const {
+SampleSearch::Prev SampleSearch::prev_of(const AxisVec& p0, const AxisVec& p1) {
+  Prev q{p1, p1 - p0, {}, 0};
+  const Vec3 d1 = q.c1.xyz();
+  q.l1 = norm(d1);
+  if (q.l1 > 0) q.u1 = (1.0 / q.l1) * d1;
+  return q;
+}
+
+bool SampleSearch::dynamics_ok(const Prev& q, const AxisVec& p2) const {
   // Each limit up to kRound: a step that brakes by exactly a along an axis whose limit is Amax
   // reads a second difference of a ± ulps; compared strictly, braking at the full rate failed
   // there, and the beam braked by the grid's next step, a/8 short, every cycle (a 90° corner
   // on the built-in machine: 273 cycles where the acceleration type needs 250).
-  const AxisVec c1 = p1 - p0, c2 = p2 - p1;
+  const AxisVec c2 = p2 - q.p1;
   for (std::size_t i = 0; i < kMaxAxes; ++i) {
     if (axis_v_[i] > 0 && std::abs(c2[i]) > axis_v_[i] + kRound) return false;
-    if (axis_a_[i] > 0 && std::abs(c2[i] - c1[i]) > axis_a_[i] + kRound) return false;
+    if (axis_a_[i] > 0 && std::abs(c2[i] - q.c1[i]) > axis_a_[i] + kRound) return false;
   }
-  const Vec3 d1 = c1.xyz(), d2 = c2.xyz();
-  const double l1 = norm(d1), l2 = norm(d2);
-  // Normal: √(l1·l2)·|d̂2 − d̂1| = 2·√(l1·l2)·sin(θ/2), the checker's a_n·τ².
-  if (l1 > 0 && l2 > 0 &&
-      std::sqrt(l1 * l2) * norm((1.0 / l2) * d2 - (1.0 / l1) * d1) > normal_ + kRound)
-    return false;
-  return resultant_ <= 0 || norm(d2 - d1) <= resultant_ + kRound;
+  const Vec3 d2 = c2.xyz();
+  // Normal: the checker's a_n·τ² = √(l1·l2)·|d̂2 − d̂1| ≤ n, whose square is 2·(l1·l2 − d1·d2) =
+  // 2·l1·(l2 − d̂1·d2) ≤ n², i.e. l2 ≤ t = d̂1·d2 + n²/(2·l1), i.e. t ≥ 0 and |d2|² ≤ t²: no
+  // square root (the four of the plain form were most of the search's time). Nearly parallel
+  // steps cancel to ulps of |d2| (~10⁻¹⁷ mm), far below kRound.
+  if (q.l1 > 0) {
+    const double n = normal_ + kRound;
+    const double t = dot(q.u1, d2) + n * n / (2 * q.l1);
+    if (t < 0 || dot(d2, d2) > t * t) return false;
+  }
+  return resultant_ <= 0 || norm(d2 - q.c1.xyz()) <= resultant_ + kRound;
 }
 
 // The feasible next landings of state n into cands_[0, count): a grid over [d − a, d + a], every
@@ -306,8 +318,7 @@ bool SampleSearch::dynamics_ok(const AxisVec& p0, const AxisVec& p1, const AxisV
 // the grid brakes up to a/4 early every cycle.
 void SampleSearch::expand(const Node& n, std::size_t& count, bool guided) {
   const double s = n.s, d = n.s - n.sp;
-  const AxisVec p0 = point(n.sp, seg_of(n.sp, n.seg));
-  const AxisVec p1 = point(s, n.seg);
+  const Prev q = prev_of(point(n.sp, seg_of(n.sp, n.seg)), point(s, n.seg));
   double lo = std::max(0.0, d - a_);
   const double hi = d + a_;
   // Just past a fold crossed by the last step, x = s − js: the checker reads the sample on the
@@ -359,9 +370,9 @@ void SampleSearch::expand(const Node& n, std::size_t& count, bool guided) {
     if (d2 < lo - kRound || d2 > hi + kRound) continue;  // s + x − s: ulps of s
     Cand c{s2, n.seg, 0};
     if (step_ok(s, d, n.seg, s2, c.seg2)) {  // (else 0: never bisected against)
-      const int level = !dynamics_ok(p0, p1, point(s2, c.seg2)) ? 0
-                        : guided                                ? can_brake(s2, d2, c.seg2)
-                                                                : 2;
+      const int level = !dynamics_ok(q, point(s2, c.seg2)) ? 0
+                        : guided                           ? can_brake(s2, d2, c.seg2)
+                                                           : 2;
       c.ok = level > 0 ? level : -1;
     }
     cands_[ne++] = c;
@@ -380,7 +391,7 @@ void SampleSearch::expand(const Node& n, std::size_t& count, bool guided) {
         for (int it = 0; it < opt_.bisect; ++it) {
           const double mid = 0.5 * (g + b);
           std::uint64_t mseg = 0;
-          const int lv = step_ok(s, d, n.seg, mid, mseg) && dynamics_ok(p0, p1, point(mid, mseg))
+          const int lv = step_ok(s, d, n.seg, mid, mseg) && dynamics_ok(q, point(mid, mseg))
                              ? (guided ? can_brake(mid, mid - s, mseg) : 2)
                              : 0;
           if (lv >= level) {

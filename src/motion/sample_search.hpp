@@ -164,7 +164,14 @@ class SampleSearch {
   void update_eff(std::uint64_t last, bool all = false);
   int can_brake(double s, double d, std::uint64_t segment) const;
   bool step_ok(double s, double d_in, std::uint64_t segment, double s2, std::uint64_t& seg2) const;
-  bool dynamics_ok(const AxisVec& p0, const AxisVec& p1, const AxisVec& p2) const;
+  // What the dynamic rules need of a node's last step, computed once per expansion.
+  struct Prev {
+    AxisVec p1, c1;  // the sample and the step into it
+    Vec3 u1;         // that step's unit direction (zero if it is empty)
+    double l1 = 0;   // its length
+  };
+  static Prev prev_of(const AxisVec& p0, const AxisVec& p1);
+  bool dynamics_ok(const Prev& q, const AxisVec& p2) const;
   void expand(const Node& n, std::size_t& count, bool guided = true);
   std::size_t brake_to_rest(Node n, std::uint64_t cycle, bool record);
   void offer(const Node& child, std::size_t cls);
