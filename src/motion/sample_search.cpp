@@ -158,6 +158,28 @@ double SampleSearch::brake_distance(double d, double c) const {
   return m1 * d - a_ * m1 * (m1 + 1) / 2;
 }
 
+// The largest step d with brake_distance(d, c) < room (room > 0). With c' = c + kRound the
+// distance is 0 up to d = c' + a and, for d − c' in (k·a, (k+1)·a], k·d − a·k·(k+1)/2: rising
+// in d, with a jump of c' where k steps up. Its value at the top of interval k is
+// k·c' + a·k·(k+1)/2; the first k where that reaches room, from (a/2)·k² + (c' + a/2)·k = room,
+// holds the answer: d < (room + a·k·(k+1)/2)/k there, and never below the interval's foot
+// c' + k·a (the jump). The closed form then moves by ulps to the largest double below the
+// bound (a bisection of 60 steps before: most of the search's time on a window of 10 000
+// short segments, walked back each time one arrives).
+double SampleSearch::brake_limit(double c, double room) const {
+  const double c1 = c + kRound;
+  const double b = c1 + a_ / 2;
+  double k = std::max(1.0, std::ceil((std::sqrt(b * b + 2 * a_ * room) - b) / a_));
+  while (k > 1 && (k - 1) * c1 + a_ * (k - 1) * k / 2 >= room) --k;
+  while (k * c1 + a_ * k * (k + 1) / 2 < room) ++k;
+  double d = std::max(c1 + k * a_, (room + a_ * k * (k + 1) / 2) / k);
+  while (d > 0 && brake_distance(d, c) >= room) d = std::nextafter(d, 0.0);
+  for (double up = std::nextafter(d, kInf); brake_distance(up, c) < room;
+       up = std::nextafter(d, kInf))
+    d = up;
+  return d;
+}
+
 // Effective caps for the backward guide, from segment `last` back while they change: a
 // crossing step of joint j touches segment j, so it is below that segment's cap too, and after
 // crossing j, joint j+1 must still be met (the largest d with brake_distance(d, eff_{j+1}) <
@@ -182,14 +204,7 @@ void SampleSearch::update_eff(std::uint64_t last, bool all) {
     double eff = own(j);
     const double next = seg(j + 1).eff;
     const double room = joint_s(j + 1) - joint_s(j);
-    if (brake_distance(eff, next) >= room) {
-      double lo = 0, hi = eff;
-      for (int it = 0; it < 60; ++it) {
-        const double mid = 0.5 * (lo + hi);
-        (brake_distance(mid, next) < room ? lo : hi) = mid;
-      }
-      eff = lo;
-    }
+    if (brake_distance(eff, next) >= room) eff = brake_limit(next, room);
     if (eff == g.eff && j + 1 < last && !all) break;
     g.eff = eff;
   }

@@ -153,6 +153,7 @@ class SampleSearch {
   std::uint64_t seg_of(double s, std::uint64_t hint) const;
   AxisVec point(double s, std::uint64_t segment) const;
   double brake_distance(double d, double c) const;
+  double brake_limit(double c, double room) const;
   // Largest step inside segment g at override ratio r.
   static double cap(const Seg& g, double r) { return std::min(g.feed * r, g.shape); }
   double ratio_at(std::uint64_t cycle) const;
