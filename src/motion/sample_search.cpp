@@ -326,16 +326,13 @@ bool SampleSearch::dynamics_ok(const Prev& q, const AxisVec& p2) const {
   return resultant_ <= 0 || norm(d2 - q.c1.xyz()) <= resultant_ + kRound;
 }
 
-// The feasible next landings of state n into cands_[0, count): a grid over [d − a, d + a], every
-// joint in reach (on it, just before it, and the largest step the caps crossed so far allow),
-// and the boundary of the dynamic rules and the guide between a feasible and a rejected
-// candidate (bisection). The guide's boundary is the braking curve to the next cap: without it
-// the grid brakes up to a/4 early every cycle.
-void SampleSearch::expand(const Node& n, std::size_t& count, bool guided) {
+// The candidate landings of state n into cand_s_[0, return), sorted and unique: a grid over
+// [d − a, d + a] (lo, hi: the step's range), every joint in reach (on it, just before it, and
+// the largest step the caps crossed so far allow).
+std::size_t SampleSearch::landings(const Node& n, double& lo, double& hi) {
   const double s = n.s, d = n.s - n.sp;
-  const Prev q = prev_of(point(n.sp, seg_of(n.sp, n.seg)), point(s, n.seg));
-  double lo = std::max(0.0, d - a_);
-  const double hi = d + a_;
+  lo = std::max(0.0, d - a_);
+  hi = d + a_;
   // Just past a fold crossed by the last step, x = s − js: the checker reads the sample on the
   // segment before the fold first, y = x·(1 − c) short of ours, and keeps that reading unless
   // ours needs less speed: max(d, d2) < max(d − y, d2 + y), i.e. d2 > d − y. (Read there, the
@@ -375,9 +372,42 @@ void SampleSearch::expand(const Node& n, std::size_t& count, bool guided) {
     if (s + cum > js && cum >= lo) cand_s_[nc++] = s + std::min(cum, hi);
   }
   std::sort(cand_s_.begin(), cand_s_.begin() + static_cast<std::ptrdiff_t>(nc));
-  nc = static_cast<std::size_t>(
+  return static_cast<std::size_t>(
       std::unique(cand_s_.begin(), cand_s_.begin() + static_cast<std::ptrdiff_t>(nc)) -
       cand_s_.begin());
+}
+
+// The boundary of the rules between a feasible landing `good` and a rejected one `bad` of the
+// step from n (bisection): the largest guide level ≥ `level` found nearest `bad`.
+SampleSearch::Cand SampleSearch::boundary(const Node& n, const Prev& q, const Cand& good,
+                                          const Cand& bad, int level, bool guided) const {
+  const double s = n.s, d = n.s - n.sp;
+  Cand g = good;
+  double b = bad.s2;
+  for (int it = 0; it < opt_.bisect; ++it) {
+    const double mid = 0.5 * (g.s2 + b);
+    std::uint64_t mseg = 0;
+    const int lv = step_ok(s, d, n.seg, mid, mseg) && dynamics_ok(q, point(mid, mseg))
+                       ? (guided ? can_brake(mid, mid - s, mseg) : 2)
+                       : 0;
+    if (lv >= level) {
+      g = {mid, mseg, lv};
+    } else {
+      b = mid;
+    }
+  }
+  return g;
+}
+
+// The feasible next landings of state n into cands_[0, count): the landings above, and the
+// boundary of the dynamic rules and the guide between a feasible and a rejected candidate
+// (bisection). The guide's boundary is the braking curve to the next cap: without it the grid
+// brakes up to a/4 early every cycle.
+void SampleSearch::expand(const Node& n, std::size_t& count, bool guided) {
+  const double s = n.s, d = n.s - n.sp;
+  const Prev q = prev_of(point(n.sp, seg_of(n.sp, n.seg)), point(s, n.seg));
+  double lo = 0, hi = 0;
+  const std::size_t nc = landings(n, lo, hi);
   std::size_t ne = 0;
   for (std::size_t i = 0; i < nc; ++i) {
     const double s2 = cand_s_[i];
@@ -400,24 +430,8 @@ void SampleSearch::expand(const Node& n, std::size_t& count, bool guided) {
       // The boundary of each level the good candidate holds and the bad one does not.
       for (int level = 1; level <= 2; ++level) {
         if (good.ok < level || bad.ok == 0 || bad.ok >= level) continue;
-        double g = good.s2, b = bad.s2;
-        std::uint64_t gseg = good.seg2;
-        int glevel = good.ok;
-        for (int it = 0; it < opt_.bisect; ++it) {
-          const double mid = 0.5 * (g + b);
-          std::uint64_t mseg = 0;
-          const int lv = step_ok(s, d, n.seg, mid, mseg) && dynamics_ok(q, point(mid, mseg))
-                             ? (guided ? can_brake(mid, mid - s, mseg) : 2)
-                             : 0;
-          if (lv >= level) {
-            g = mid;
-            gseg = mseg;
-            glevel = lv;
-          } else {
-            b = mid;
-          }
-        }
-        if (g != good.s2) cands_[ne++] = {g, gseg, glevel};
+        const Cand g = boundary(n, q, good, bad, level, guided);
+        if (g.s2 != good.s2) cands_[ne++] = g;
       }
     }
   }
@@ -426,21 +440,43 @@ void SampleSearch::expand(const Node& n, std::size_t& count, bool guided) {
     if (cands_[i].ok >= 1) cands_[count++] = cands_[i];
 }
 
+// The smallest of expand(n, ·, false)'s feasible landings, judging the candidates from the
+// smallest up: the first feasible one, or its boundary with the rejected one before it (every
+// other boundary lies above). One or two candidates judged where expand judges ~20 and bisects
+// their boundaries: the certification's brake was most of the search's worst cycles.
+bool SampleSearch::smallest_step(const Node& n, Cand& out) {
+  const double s = n.s, d = n.s - n.sp;
+  const Prev q = prev_of(point(n.sp, seg_of(n.sp, n.seg)), point(s, n.seg));
+  double lo = 0, hi = 0;
+  const std::size_t nc = landings(n, lo, hi);
+  Cand before{0, 0, 0};  // the rejected candidate below (0: none, or a static rule failed)
+  for (std::size_t i = 0; i < nc; ++i) {
+    const double s2 = cand_s_[i];
+    const double d2 = s2 - s;
+    if (d2 < lo - kRound || d2 > hi + kRound) continue;  // as expand
+    Cand c{s2, n.seg, 0};
+    if (step_ok(s, d, n.seg, s2, c.seg2)) c.ok = dynamics_ok(q, point(s2, c.seg2)) ? 2 : -1;
+    if (c.ok > 0) {
+      out = before.ok == -1 ? boundary(n, q, c, before, 1, false) : c;
+      return true;
+    }
+    before = c;
+  }
+  return false;
+}
+
 // The greedy brake: the smallest feasible step every cycle until the tool rests (step 0, or
 // the end point reached with a step ≤ a). Returns the cycles taken, 0 if it fails. With
 // `record`, each of its samples is committed.
 std::size_t SampleSearch::brake_to_rest(Node n, std::uint64_t cycle, bool record) {
   const double end = terminal();
   for (std::size_t k = 1; k < out_reserve_; ++k) {
-    std::size_t count = 0;
     ratio_ = ratio_at(cycle + k);
-    expand(n, count, false);  // the rules alone: a brake that comes to rest is a certificate
-    const Cand* best = nullptr;
-    for (std::size_t i = 0; i < count; ++i)
-      if (!best || cands_[i].s2 < best->s2) best = &cands_[i];
-    if (!best) return 0;
-    const double d2 = best->s2 - n.s;
-    n = Node{n.s, best->s2, best->seg2, -1};
+    Cand best{};
+    // The rules alone: a brake that comes to rest is a certificate.
+    if (!smallest_step(n, best)) return 0;
+    const double d2 = best.s2 - n.s;
+    n = Node{n.s, best.s2, best.seg2, -1};
     if (record) {
       emit(n.s, n.seg);
       last_commit_ = n;

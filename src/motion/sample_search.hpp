@@ -173,7 +173,11 @@ class SampleSearch {
   };
   static Prev prev_of(const AxisVec& p0, const AxisVec& p1);
   bool dynamics_ok(const Prev& q, const AxisVec& p2) const;
+  std::size_t landings(const Node& n, double& lo, double& hi);
+  Cand boundary(const Node& n, const Prev& q, const Cand& good, const Cand& bad, int level,
+                bool guided) const;
   void expand(const Node& n, std::size_t& count, bool guided = true);
+  bool smallest_step(const Node& n, Cand& out);
   std::size_t brake_to_rest(Node n, std::uint64_t cycle, bool record);
   void offer(const Node& child, std::size_t cls);
   void commit_lineage(std::uint64_t cycle, std::size_t i);
