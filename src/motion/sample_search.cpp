@@ -102,7 +102,7 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
     hist(0, 0) = {s0, -1};
     last_commit_ = beam_[0];
     popped_s_ = popped_sp_ = s0;
-    emit(s0, 0);
+    emit(beam_[0], 0);
   }
   return true;
 }
@@ -478,7 +478,7 @@ std::size_t SampleSearch::brake_to_rest(Node n, std::uint64_t cycle, bool record
     const double d2 = best.s2 - n.s;
     n = Node{n.s, best.s2, best.seg2, -1};
     if (record) {
-      emit(n.s, n.seg);
+      emit(n, committed_ + 1);
       last_commit_ = n;
       ++committed_;
     }
@@ -506,17 +506,42 @@ void SampleSearch::offer(const Node& c, std::size_t cls) {
   nb = std::min(nb + 1, opt_.per_bin);
 }
 
-void SampleSearch::emit(double s, std::uint64_t segment) {
+void SampleSearch::emit(const Node& n, std::uint64_t cycle, bool pending) {
   // A sample on a joint belongs to the segment it arrived by (its block's line).
-  std::uint64_t line_seg = segment;
-  if (line_seg > seg_base_ && s == seg(line_seg).geo.s0_mm) --line_seg;
+  std::uint64_t line_seg = n.seg;
+  if (line_seg > seg_base_ && n.s == seg(line_seg).geo.s0_mm) --line_seg;
   Out& o = out_[(out_head_ + out_count_) % out_.size()];
-  o = {point(s, segment), seg(line_seg).geo.line, s};
+  o = {point(n.s, n.seg), seg(line_seg).geo.line, n.s, pending, n.sp, n.seg, cycle};
   ++out_count_;
+}
+
+// The newest popped sample (the tool's) becomes the newest committed state.
+void SampleSearch::from_tool() {
+  committed_ = popped_n_ > 0 ? popped_n_ - 1 : 0;
+  last_commit_ = Node{popped_sp_, popped_s_, seg_of(popped_s_, last_commit_.seg), -1};
 }
 
 bool SampleSearch::pop(AxisVec& position, std::uint32_t& line, double& s_mm) {
   if (out_count_ == 0) return false;
+  if (out_[out_head_].pending) {
+    // Certified as it is handed out, not when its lineage is committed: one brake per cycle
+    // instead of up to L in the cycle a lineage coalesces (the search's worst cycles).
+    const Out& o = out_[out_head_];
+    const std::size_t k = brake_to_rest(Node{o.sp, o.s, o.seg, -1}, o.cycle, false);
+    if (k == 0) {
+      // Met like a death, from the tool's sample (certified when it was popped): what was
+      // planned after it goes.
+      ++stats_.uncertified;
+      out_count_ = 0;
+      from_tool();
+      at_stop_ = finished_ = false;
+      recover();
+      if (out_count_ == 0) return false;
+    } else {
+      stats_.longest_brake = std::max(stats_.longest_brake, k);
+      out_[out_head_].pending = false;
+    }
+  }
   const Out& o = out_[out_head_];
   position = o.p;
   line = o.line;
@@ -529,22 +554,16 @@ bool SampleSearch::pop(AxisVec& position, std::uint32_t& line, double& s_mm) {
   return true;
 }
 
-// Commits the state n (the cycle after committed_) if the greedy brake brings it to rest.
-bool SampleSearch::certify_and_emit(const Node& n) {
-  const std::size_t k = brake_to_rest(n, committed_ + 1, false);
-  if (k == 0) {
-    ++stats_.uncertified;
-    return false;
-  }
-  stats_.longest_brake = std::max(stats_.longest_brake, k);
+// Commits the state n (the cycle after committed_); pop() certifies it (its greedy brake to
+// rest) before handing it out.
+void SampleSearch::commit_pending(const Node& n) {
   ++committed_;
   last_commit_ = n;
-  emit(n.s, n.seg);
-  return true;
+  emit(n, committed_, true);
 }
 
 // The lineage of entry i of row `cycle`, from committed_ + 1 up to `cycle`, is committed state
-// by state; a state whose brake fails ends it in a recovery.
+// by state (pop() certifies each before handing it out).
 void SampleSearch::commit_lineage(std::uint64_t cycle, std::size_t i) {
   const auto len = static_cast<std::size_t>(cycle - committed_);
   for (std::size_t k = len; k-- > 0;) {
@@ -555,10 +574,7 @@ void SampleSearch::commit_lineage(std::uint64_t cycle, std::size_t i) {
   for (std::size_t k = 0; k < len; ++k) {
     Node n{last_commit_.s, trace_[k].s, 0, -1};
     n.seg = seg_of(n.s, last_commit_.seg);
-    if (!certify_and_emit(n)) {
-      recover();
-      return;
-    }
+    commit_pending(n);
   }
   retire();
 }
@@ -634,6 +650,24 @@ void SampleSearch::force_commit() {
 // newest committed state (which did), and the search starts again from rest.
 void SampleSearch::recover() {
   ++stats_.recoveries;
+  // The newest committed state may not be certified yet (pop() certifies): the newest that is
+  // brakes, and what was committed after it goes (pop() still certifies those before it).
+  while (out_count_ > 0) {
+    Out& o = out_[(out_head_ + out_count_ - 1) % out_.size()];
+    if (!o.pending) break;
+    if (brake_to_rest(Node{o.sp, o.s, o.seg, -1}, o.cycle, false) > 0) {
+      o.pending = false;
+      break;
+    }
+    ++stats_.uncertified;
+    if (--out_count_ == 0) {
+      from_tool();
+    } else {
+      const Out& b = out_[(out_head_ + out_count_ - 1) % out_.size()];
+      committed_ = b.cycle;
+      last_commit_ = Node{b.sp, b.s, b.seg, -1};
+    }
+  }
   if (brake_to_rest(last_commit_, committed_, true) == 0) {
     failed_ = true;  // cannot happen: the state was certified by this very brake
     return;
@@ -668,7 +702,7 @@ void SampleSearch::reached_terminal() {
   // then), and the plan after it starts from rest, not from the landing step.
   at_stop_ = true;
   last_commit_.sp = last_commit_.s;
-  emit(last_commit_.s, last_commit_.seg);
+  emit(last_commit_, committed_ + 1);
   front_ = ++committed_;
 }
 
@@ -801,10 +835,10 @@ bool SampleSearch::advance(bool near_window_end) {
     }
     for (std::size_t k = 0; k < len; ++k) {
       last_commit_ = Node{last_commit_.s, trace_[k].s, seg_of(trace_[k].s, last_commit_.seg), -1};
-      emit(last_commit_.s, last_commit_.seg);
+      emit(last_commit_, committed_ + 1 + k);
     }
     last_commit_ = Node{last_commit_.s, end, seg_of(end, last_commit_.seg), -1};
-    emit(end, last_commit_.seg);
+    emit(last_commit_, committed_ + 1 + len);
     committed_ = front_ = front_ + 1;
     reached_terminal();
     return true;

@@ -145,6 +145,11 @@ class SampleSearch {
     AxisVec p;
     std::uint32_t line;
     double s;
+    // A committed state whose brake to rest is still to be found (when it is popped): its
+    // previous sample, segment and cycle.
+    bool pending = false;
+    double sp = 0;
+    std::uint64_t seg = 0, cycle = 0;
   };
 
   const Seg& seg(std::uint64_t i) const { return segs_[i % segs_.size()]; }
@@ -181,13 +186,14 @@ class SampleSearch {
   std::size_t brake_to_rest(Node n, std::uint64_t cycle, bool record);
   void offer(const Node& child, std::size_t cls);
   void commit_lineage(std::uint64_t cycle, std::size_t i);
-  bool certify_and_emit(const Node& n);
+  void commit_pending(const Node& n);
   void recover();
   void retire();
   void force_commit();
   void find_coalescence();
   std::size_t ancestor(std::size_t i, std::uint64_t cycle) const;
-  void emit(double s, std::uint64_t segment);
+  void emit(const Node& n, std::uint64_t cycle, bool pending = false);
+  void from_tool();
   Hist& hist(std::uint64_t cycle, std::size_t i) {
     return hist_[(cycle % hist_rows_) * beam_cap_ + i];
   }
