@@ -152,8 +152,8 @@ class SampleSearch {
     std::uint64_t seg = 0, cycle = 0;
   };
 
-  const Seg& seg(std::uint64_t i) const { return segs_[i % segs_.size()]; }
-  Seg& seg(std::uint64_t i) { return segs_[i % segs_.size()]; }
+  const Seg& seg(std::uint64_t i) const { return segs_[i & seg_mask_]; }
+  Seg& seg(std::uint64_t i) { return segs_[i & seg_mask_]; }
   double joint_s(std::uint64_t i) const { return seg(i).geo.end_mm(); }
   std::uint64_t seg_of(double s, std::uint64_t hint) const;
   AxisVec point(double s, std::uint64_t segment) const;
@@ -208,7 +208,8 @@ class SampleSearch {
   double max_step_ = 0, reach_mm_ = 0, bin_w_ = 0;
   std::size_t nbins_ = 0, beam_cap_ = 0, hist_rows_ = 0, cand_cap_ = 0;
 
-  std::vector<Seg> segs_;
+  std::vector<Seg> segs_;  // a ring of a power of two slots
+  std::uint64_t seg_mask_ = 0;
   std::uint64_t seg_base_ = 0, seg_end_ = 0;  // [base, end) held
   bool program_ended_ = false;
 
