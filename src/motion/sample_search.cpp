@@ -650,8 +650,9 @@ void SampleSearch::force_commit() {
   find_coalescence();
 }
 
-// The beam died, or a state to commit did not brake to rest: the tool brakes to rest from the
-// newest committed state (which did), and the search starts again from rest.
+// The beam died, a forced commit found no lineage that brakes to rest, or a hold: the tool
+// brakes to rest from the newest committed state that certifies, and the search starts again
+// from rest.
 void SampleSearch::recover() {
   ++stats_.recoveries;
   // The newest committed state may not be certified yet (pop() certifies): the newest that is
