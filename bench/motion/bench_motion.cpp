@@ -16,7 +16,9 @@
 // constructions in a row instead of benchmarking), --evict-kb N (Latency: write N KB of other
 // memory, untimed, before every step — the cache traffic of the pushes a finer program makes
 // between two cycles, on a coarse one: how much of a fine program's step() is its input's
-// traffic rather than its work).
+// traffic rather than its work), --override-every N (Latency: the feed override steps to 70,
+// 120 and 100 % in turn every N cycles, set untimed before the step it applies to: what an
+// operator's override change costs the cycle that replans for it).
 //
 // The "_merged" programs are the same blocks handed to the kernel through the collinear-piece
 // stage of `cncore run` (planner/line_merge.hpp, [motion] merge_tolerance_mm): the stage's
@@ -391,6 +393,7 @@ void print_histogram(const std::string& title, const std::vector<double>& sorted
 // cycles/s: cycles / Σ step time of the fastest run (the timer's own cost subtracted). A timed
 // empty call right after each step shows what the machine does to a 10 ns window (floor_*).
 int g_runs = 3;
+std::size_t g_override_every = 0;  // --override-every: cycles between override steps (0: none)
 std::size_t g_evict_kb = 0;
 std::vector<unsigned char> g_evict;  // --evict-kb's scratch memory
 
@@ -435,6 +438,10 @@ void BM_Latency(benchmark::State& state, LazyProgram* lazy, int type) {
         feed_kernel(k, feed, ended);
         // One byte per 64-byte line, with a running value the compiler cannot drop.
         for (std::size_t i = 0; i < g_evict.size(); i += 64) g_evict[i] += 1;
+        if (g_override_every > 0 && c > 0 && c % g_override_every == 0) {
+          constexpr std::array<double, 3> kSteps{70, 120, 100};
+          k.set_override(kSteps[(c / g_override_every - 1) % kSteps.size()]);
+        }
         benchmark::ClobberMemory();
         const std::uint64_t t0 = ticks();
         const bool more = k.step(s);
@@ -485,6 +492,7 @@ void BM_Latency(benchmark::State& state, LazyProgram* lazy, int type) {
   state.counters["cycles"] = static_cast<double>(cycles);
   state.counters["runs"] = g_runs;
   state.counters["evict_kb"] = static_cast<double>(g_evict_kb);
+  state.counters["override_every"] = static_cast<double>(g_override_every);
   state.counters["step_Mcycles_per_s"] = best_sum_ns > 0 ? 1e3 * cycles / best_sum_ns : 0;
   // The same from the per-cycle minimum over the runs (preemption taken out cycle by cycle):
   // steadier than the fastest run on the loaded machine, for before/after comparisons.
@@ -607,6 +615,8 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--evict-kb") == 0 && i + 1 < argc) {
       g_evict_kb = static_cast<std::size_t>(std::max(0, std::atoi(argv[++i])));
       g_evict.assign(g_evict_kb * 1024, 0);
+    } else if (std::strcmp(argv[i], "--override-every") == 0 && i + 1 < argc) {
+      g_override_every = static_cast<std::size_t>(std::max(0, std::atoi(argv[++i])));
     } else if (std::strcmp(argv[i], "--runs") == 0 && i + 1 < argc) {
       g_runs = std::max(1, std::atoi(argv[++i]));
     } else if (std::strcmp(argv[i], "--shared") == 0 && i + 1 < argc) {
