@@ -38,6 +38,7 @@ SampleSearch::SampleSearch(const planner::Limits& limits, const SampleSearchOpti
   // The front stays this far before a window end that is not the program's: there the guide
   // never sees the window's temporary stop, and neither does the brake of a committed state.
   reach_mm_ = brake_distance(max_step_, 0) + 2 * max_step_;
+  eff_horizon_mm_ = reach_mm_;
   bin_w_ = a_ / opt_.bins_per_a;
   nbins_ = static_cast<std::size_t>(max_step_ / bin_w_) + 2;
   beam_cap_ = kClasses * nbins_ * opt_.per_bin;
@@ -96,8 +97,10 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
       prev.stop = false;
     }
   }
+  const bool fresh = eff_fresh_ >= seg_end_;
   ++seg_end_;
   update_eff(idx);
+  if (fresh) eff_fresh_ = seg_end_;
   if (stop_after) mark_stop();
   if (idx == 0) {
     // The tool rests at the first segment's start: cycle 0.
@@ -184,34 +187,57 @@ double SampleSearch::brake_limit(double c, double room) const {
   return d;
 }
 
-// Effective caps for the backward guide, from segment `last` back while they change: a
-// crossing step of joint j touches segment j, so it is below that segment's cap too, and after
-// crossing j, joint j+1 must still be met (the largest d with brake_distance(d, eff_{j+1}) <
-// room, by bisection).
-void SampleSearch::update_eff(std::uint64_t last, bool all) {
+// The effective cap of joint j for the backward guide: a crossing step of joint j touches
+// segment j, so it is below that segment's cap too, and after crossing j, joint j+1 must still
+// be met (the largest d with brake_distance(d, eff_{j+1}) < room). Reads eff_{j+1}.
+double SampleSearch::eff_of(std::uint64_t j) const {
   // A stop must be landed on exactly: the step after it is 0, so braking counts down to 0
   // there (with the cap a instead, a state at 1.9·a a few µm before the end passed the guide
   // and could only land by slowing to rest short of it and creeping on).
-  // Landing on joint j with step x, the next step (inside segment j+1) is ≥ x − a: so x ≤
-  // cap_{j+1} + a as well.
-  auto own = [&](std::uint64_t j) {
-    const Seg& g = seg(j);
-    if (g.stop) return 0.0;
-    double c = std::min(g.joint_cap, cap(g, or_));
-    if (j + 1 < seg_end_) c = std::min(c, cap(seg(j + 1), or_) + a_);
-    return c;
-  };
-  Seg& l = seg(last);
-  l.eff = own(last);
-  for (std::uint64_t j = last; j-- > seg_base_;) {
-    Seg& g = seg(j);
-    double eff = own(j);
+  const Seg& g = seg(j);
+  if (g.stop) return 0.0;
+  double eff = std::min(g.joint_cap, cap(g, or_));
+  if (j + 1 < seg_end_) {
+    // Landing on joint j with step x, the next step (inside segment j+1) is ≥ x − a: so x ≤
+    // cap_{j+1} + a as well.
+    eff = std::min(eff, cap(seg(j + 1), or_) + a_);
     const double next = seg(j + 1).eff;
     const double room = joint_s(j + 1) - joint_s(j);
     if (brake_distance(eff, next) >= room) eff = brake_limit(next, room);
-    if (eff == g.eff && j + 1 < last && !all) break;
-    g.eff = eff;
   }
+  return eff;
+}
+
+// A segment arrived: from the last one back while the effective caps change.
+void SampleSearch::update_eff(std::uint64_t last) {
+  seg(last).eff = eff_of(last);
+  for (std::uint64_t j = last; j-- > seg_base_;) {
+    const double eff = eff_of(j);
+    if (eff == seg(j).eff && j + 1 < last) break;
+    seg(j).eff = eff;
+  }
+}
+
+// The override changed (restart()): every effective cap may change, but the guide reads only
+// those within a braking distance of the front. The caps are made current up to `upto_mm` (a
+// joint's cap depends only on the caps within eff_horizon_mm_ of it: a braking
+// distance from the top speed and two steps), from a pass that starts twice that far ahead on the
+// older caps, so a change of override costs one pass over ~3 horizons, not over the window
+// (~30 ns a segment: 0.3 ms on a window of 10 000 segments, in the cycle of the change).
+void SampleSearch::refresh_eff(double upto_mm) {
+  eff_fresh_ = std::max(eff_fresh_, seg_base_);
+  if (eff_fresh_ >= seg_end_ || joint_s(eff_fresh_) > upto_mm) return;
+  const double h = eff_horizon_mm_;
+  std::uint64_t last = eff_fresh_;
+  while (last + 1 < seg_end_ && joint_s(last) < upto_mm + 2 * h) ++last;
+  const bool to_end = last + 1 == seg_end_;
+  if (to_end) seg(last).eff = eff_of(last);
+  for (std::uint64_t j = last; j-- > eff_fresh_;) seg(j).eff = eff_of(j);
+  if (to_end) {
+    eff_fresh_ = seg_end_;
+    return;
+  }
+  while (eff_fresh_ < last && joint_s(eff_fresh_) < joint_s(last) - h) ++eff_fresh_;
 }
 
 std::uint64_t SampleSearch::seg_of(double s, std::uint64_t hint) const {
@@ -764,7 +790,7 @@ void SampleSearch::restart(double ratio, std::size_t ramp_cycles) {
     allow_[allow_n_++] = {or_, c + ramp_cycles};
   }
   or_ = ratio;
-  if (seg_end_ > 0) update_eff(seg_end_ - 1, true);
+  eff_fresh_ = seg_base_;  // refresh_eff() makes them current ahead of the front
   // At rest on a stop or at the end, with nothing left to pop: the new override applies from
   // the resume (planning now would move the tool while the kernel handles the stop's event).
   if ((at_stop() || finished_) && out_count_ == 0) return;
@@ -810,6 +836,7 @@ bool SampleSearch::advance(bool near_window_end) {
   for (const Node& n : beam_) far = std::max(far, n.s);
   const double window_end = joint_s(seg_end_ - 1);
   const double end = terminal();
+  refresh_eff(far + reach_mm_);
   // Without a stop ahead the front keeps a braking distance from the window's end.
   if (end == kInf && !near_window_end && far + reach_mm_ >= window_end) return false;
   ratio_ = ratio_at(front_ + 1);

@@ -174,7 +174,9 @@ class SampleSearch {
   void restart_at_rest();
   double shape_cap(const planner::Segment& s) const;
   double corner_cap(const planner::Segment& a, const planner::Segment& b) const;
-  void update_eff(std::uint64_t last, bool all = false);
+  double eff_of(std::uint64_t j) const;
+  void update_eff(std::uint64_t last);
+  void refresh_eff(double upto_mm);
   int can_brake(double s, double d, std::uint64_t segment) const;
   bool step_ok(double s, double d_in, std::uint64_t segment, double s2, std::uint64_t& seg2) const;
   // What the dynamic rules need of a node's last step, computed once per expansion.
@@ -213,11 +215,15 @@ class SampleSearch {
   double a_ = 0, normal_ = 0, resultant_ = 0;
   std::array<double, kMaxAxes> axis_a_{}, axis_v_{};
   double max_step_ = 0, reach_mm_ = 0, bin_w_ = 0;
+  double eff_horizon_mm_ = 0;  // a joint's effective cap depends on the caps this far ahead
   std::size_t nbins_ = 0, beam_cap_ = 0, hist_rows_ = 0, cand_cap_ = 0;
 
   std::vector<Seg> segs_;  // a ring of a power of two slots
   std::uint64_t seg_mask_ = 0;
   std::uint64_t seg_base_ = 0, seg_end_ = 0;  // [base, end) held
+  // Effective caps are current (this override's) for segments [seg_base_, eff_fresh_); after
+  // an override change the ones beyond are made current as the front comes near them.
+  std::uint64_t eff_fresh_ = 0;
   bool program_ended_ = false;
 
   std::vector<Node> beam_, bins_;                    // live states; per bin the K farthest children
