@@ -643,9 +643,11 @@ std::size_t SampleSearch::ancestor(std::size_t i, std::uint64_t cycle) const {
   return i;
 }
 
-// Keep only the states that share, at cycle c0 (committed_ < c0 ≤ front_), the ancestor of the
-// farthest state whose ancestor there brakes to rest, and commit up to it.
-void SampleSearch::force_commit(std::uint64_t c0) {
+// The commits lag the front by more than L: keep only the states that share, L/2 cycles back,
+// the ancestor of the farthest state whose ancestor there brakes to rest.
+void SampleSearch::force_commit() {
+  ++stats_.forced;
+  const std::uint64_t c0 = front_ - opt_.max_lag_cycles / 2;
   const std::size_t n = beam_.size();
   for (std::size_t i = 0; i < n; ++i) idx_a_[i] = static_cast<std::uint32_t>(i);
   std::sort(idx_a_.begin(), idx_a_.begin() + static_cast<std::ptrdiff_t>(n),
@@ -815,15 +817,6 @@ void SampleSearch::idle() {
   }
 }
 
-bool SampleSearch::commit_now() {
-  if (out_count_ > 0 || front_ == committed_ || beam_.empty()) return out_count_ > 0;
-  // Half-way back: the states of the last few cycles still differ, their ancestors there mostly
-  // do not (the lineages of a beam started at one state coalesce within a few cycles at low lag).
-  ++stats_.prompt;
-  force_commit(committed_ + std::max<std::uint64_t>(1, (front_ - committed_) / 2));
-  return out_count_ > 0;
-}
-
 void SampleSearch::brake_now() {
   restart(or_, 0);
   recover();
@@ -900,9 +893,7 @@ bool SampleSearch::advance(bool near_window_end) {
   }
   stats_.max_beam = std::max(stats_.max_beam, beam_.size());
   if (front_ - committed_ > opt_.max_lag_cycles) {
-    // The commits lag the front by more than L: commit L/2 cycles back.
-    ++stats_.forced;
-    force_commit(front_ - opt_.max_lag_cycles / 2);
+    force_commit();
   } else if (front_ % kCoalesceEvery == 0) {
     find_coalescence();
   }

@@ -60,7 +60,6 @@ struct SampleSearchStats {
   std::size_t max_beam = 0;     // most live states in one cycle
   std::size_t expanded = 0;     // states expanded (beam sizes summed)
   std::size_t forced = 0;       // forced commits (lag above L)
-  std::size_t prompt = 0;       // commits forced by commit_now() (the cycle needed a sample)
   std::size_t recoveries = 0;   // deaths met by the brake to rest
   std::size_t uncertified = 0;  // coalesced states whose brake failed (met like a death)
   std::size_t longest_brake = 0;
@@ -107,12 +106,6 @@ class SampleSearch {
   // unless near_window_end: then its states brake for it, as for a stop they never reach), the
   // output ring is full, a stop or the end point is reached.
   bool advance(bool near_window_end = false);
-
-  // Nothing committed waits and the cycle needs a sample: commit the lineage of the farthest
-  // state that brakes to rest, half-way between the newest commit and the front, instead of
-  // searching on until the lineages coalesce (up to L cycles of search in one cycle). Returns
-  // whether a sample now waits.
-  bool commit_now();
 
   // The next committed sample (the cycle's side: O(1), no allocation). False when none waits.
   bool pop(AxisVec& position, std::uint32_t& line, double& s_mm);
@@ -198,7 +191,7 @@ class SampleSearch {
   void commit_pending(const Node& n);
   void recover();
   void retire();
-  void force_commit(std::uint64_t c0);
+  void force_commit();
   void find_coalescence();
   std::size_t ancestor(std::size_t i, std::uint64_t cycle) const;
   void emit(const Node& n, std::uint64_t cycle, bool pending = false);

@@ -7,11 +7,12 @@
 namespace cncore::motion {
 
 namespace {
-// Front cycles searched per cycle: enough that the front gains on the tool; more while few
-// committed samples wait (after a start, a resume or an override change).
-constexpr int kFrontCyclesPerCycle = 2;
-constexpr int kCatchUpCyclesPerCycle = 3;
-constexpr std::size_t kLowWaterSamples = 16;  // fewer waiting: catch up
+// Front cycles searched per cycle: two while fewer than kLeadSamples committed samples wait
+// (the front gains on the tool), then one (it keeps pace). Two every cycle made every other
+// cycle search two once the output ring was full: bench_motion Latency/random_2k/search worst
+// cycle 132 → 84–89 µs, p99 102–107 → 71–72 µs with one.
+constexpr int kCatchUpCyclesPerCycle = 2;
+constexpr std::size_t kLeadSamples = 256;
 
 SampleSearchOptions search_options(std::size_t window_segments) {
   SampleSearchOptions o;
@@ -69,16 +70,17 @@ void SearchAccDec::step(const CycleInput& in) {
     // A few front cycles every cycle, so that the front gains on the tool (until the output
     // ring or the window's end stops it) and the search's work is spread over the cycles; it
     // came in bursts when the committed samples ran out (a worst cycle of 1.9 ms on random_2k).
-    // The budget is fixed: when nothing committed waits, the cycle commits what the search
-    // has (commit_now()) rather than searching on until the lineages coalesce, which took up
-    // to L = 128 front cycles in one cycle after an override change (0.7 ms on random_2k).
-    const int budget =
-        search_.ready() < kLowWaterSamples ? kCatchUpCyclesPerCycle : kFrontCyclesPerCycle;
-    int used = 0;
-    while (used < budget && search_.advance(false)) ++used;
-    // Late blocks: the front may close in on the window's end once nothing else waits.
-    while (search_.ready() == 0 && used < budget && search_.advance(true)) ++used;
-    if (search_.ready() == 0) search_.commit_now();
+    // When nothing committed waits (the start, a resume, an override change), the search goes
+    // on until its lineages coalesce: committing earlier, from a beam a few cycles deep, made
+    // the beam die and the tool brake to rest after frequent override changes (tried, session
+    // 21: 1–7 recoveries on a rounded circle with a restart every 7–64 cycles, none without).
+    const int budget = search_.ready() < kLeadSamples ? kCatchUpCyclesPerCycle : 1;
+    for (int i = 0; i < budget && search_.advance(false); ++i) {
+    }
+    while (search_.ready() == 0 && search_.advance(false)) {
+    }
+    while (search_.ready() == 0 && search_.advance(true)) {
+    }
     // Nothing committed and no way on (a failed recovery): the certified brake.
     if (search_.ready() == 0 && !search_.at_stop() && !search_.finished() && started_)
       search_.brake_now();

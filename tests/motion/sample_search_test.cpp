@@ -80,64 +80,6 @@ SearchRun run_search(const MachineConfig& m, const std::vector<Block>& blocks,
   return r;
 }
 
-// The cycle's cadence, as the acc/dec type "search" drives it: each cycle searches at most
-// `budget` front cycles, commits what it has when nothing waits (commit_now()) and pops one
-// sample; every `restart_every` cycles the plan is dropped and made again from the tool's sample
-// (what an override change does). `gaps` counts cycles without a sample before the end.
-struct CycleRun {
-  SearchRun run;
-  std::size_t gaps = 0;
-};
-
-CycleRun run_cycles(const MachineConfig& m, const std::vector<Block>& blocks, int budget,
-                    std::size_t restart_every) {
-  CycleRun c;
-  SearchRun& r = c.run;
-  SampleSearch ss(planner::make_limits(m, false), SampleSearchOptions{});
-  r.traj.period_s = m.period_s;
-  std::size_t next = 0;
-  bool ended = false;
-  AxisVec p;
-  std::uint32_t line = 0;
-  double s = 0;
-  for (std::size_t cycle = 0; !ss.finished() || ss.ready() > 0; ++cycle) {
-    if (cycle > 1'000'000) {
-      r.error = "stuck";
-      break;
-    }
-    while (next < blocks.size() && ss.wants_segment()) {
-      if (!ss.push(blocks[next++])) {
-        r.error = "block not supported";
-        return c;
-      }
-    }
-    if (next == blocks.size() && !ended) {
-      ss.end_of_program();
-      ended = true;
-    }
-    if (restart_every > 0 && cycle > 0 && cycle % restart_every == 0) ss.restart(1.0, 0);
-    if (ss.at_stop() && ss.ready() == 0) ss.resume();  // released at once
-    const long before = cncore::testing::allocations();
-    for (int i = 0; i < budget && ss.advance(); ++i) {
-    }
-    if (ss.ready() == 0) ss.commit_now();
-    const bool got = ss.pop(p, line, s);
-    r.allocations += cncore::testing::allocations() - before;
-    if (ss.failed()) {
-      r.error = "failed";
-      break;
-    }
-    if (got) {
-      r.traj.add(static_cast<double>(r.traj.size()) * m.period_s, line, p);
-    } else if (!ss.finished()) {
-      ++c.gaps;
-    }
-  }
-  r.stats = ss.stats();
-  r.cycles = r.traj.size() > 0 ? r.traj.size() - 1 : 0;
-  return c;
-}
-
 std::uint64_t kernel_cycles(const MachineConfig& m, const std::vector<Block>& blocks) {
   RunOpts o;
   o.kernel.accdec = AccDecType::kAcceleration;
@@ -243,29 +185,6 @@ TEST(SampleSearch, SmallWindowAndForcedCommitsKeepEveryLimit) {
   expect_clean(m, p, r, "small window, lag 16");
   EXPECT_GT(r.stats.forced, 0u);
   EXPECT_EQ(r.allocations, 0);
-}
-
-// Restarts every few cycles (override changes) and a budget of 3 front cycles per cycle: when
-// nothing committed waits, commit_now() commits what the search has instead of searching on
-// until the lineages coalesce. Every cycle gets a sample and the rules hold.
-TEST(SampleSearch, PromptCommitsAfterRestartsKeepEveryLimit) {
-  const MachineConfig m = machine();
-  const Prog p = rounded_circle(25.4, 0.016, 30);
-  const SearchRun plain = run_search(m, p.blocks);
-  for (const std::size_t every : {37UL, 200UL}) {
-    const CycleRun c = run_cycles(m, p.blocks, 3, every);
-    const std::string what = "restart every " + std::to_string(every) + " cycles";
-    expect_clean(m, p, c.run, what);
-    EXPECT_GT(c.run.stats.prompt, 0u) << what;
-    EXPECT_EQ(c.gaps, 0u) << what;
-    EXPECT_EQ(c.run.allocations, 0) << what;
-    // Measured: 1 147 and 1 149 cycles against 1 148 (the lineages chosen half-way back are
-    // those the search would have kept).
-    EXPECT_LE(static_cast<double>(c.run.cycles), 1.01 * static_cast<double>(plain.cycles)) << what;
-    std::printf("%s: %llu cycles, %zu prompt commits, %zu recoveries; without restarts %llu\n",
-                what.c_str(), static_cast<unsigned long long>(c.run.cycles), c.run.stats.prompt,
-                c.run.stats.recoveries, static_cast<unsigned long long>(plain.cycles));
-  }
 }
 
 // Exact stops (G9) and a waiting M-code stop the tool on their points; a zig-zag's corners.

@@ -151,6 +151,29 @@ TEST(SearchAccDec, OverrideStepsAndFeedHold) {
   }
 }
 
+// An operator turning the override knob: a step every 37 ms on the staircase of rounded chords.
+// Each step replans from the tool's sample; the new plan must neither break a limit nor bring
+// the tool to rest (a death of the search is met by a brake to rest: committing from a beam only
+// a few cycles deep to keep the replanning cycle short did that 2 times here, session 21).
+TEST(SearchAccDec, FrequentOverrideStepsNeverBringTheToolToRest) {
+  const MachineConfig m = test_machine();
+  const Prog p = rounded_circle(30);
+  const std::size_t plain = cycles(run(m, p.blocks, search_opts()));
+  RunOpts o = search_opts();
+  for (int k = 1; k < 40; ++k) o.override_steps.push_back({0.037 * k, k % 3 == 0 ? 100 : 95});
+  const RunResult r = run_checked(m, p, o, "override steps every 37 ms");
+  std::size_t first = 0, last = 0;
+  for (std::size_t i = 1; i < r.samples.size(); ++i) {
+    if (r.samples[i].position == r.samples[i - 1].position) continue;
+    if (first == 0) first = i;
+    last = i;
+  }
+  for (std::size_t i = first; i <= last; ++i)
+    ASSERT_NE(r.samples[i].position, r.samples[i - 1].position) << "at rest at sample " << i;
+  std::printf("override steps every 37 ms: %zu cycles, without steps %zu\n", cycles(r), plain);
+  EXPECT_LE(static_cast<double>(cycles(r)), 1.01 * static_cast<double>(plain));
+}
+
 TEST(SearchAccDec, DwellsExactStopsAndEventsStopTheTool) {
   const MachineConfig m = test_machine();
   Prog p;
