@@ -160,7 +160,7 @@ TEST(SearchAccDec, FrequentOverrideStepsNeverBringTheToolToRest) {
   const Prog p = rounded_circle(30);
   const std::size_t plain = cycles(run(m, p.blocks, search_opts()));
   RunOpts o = search_opts();
-  for (int k = 1; k < 40; ++k) o.override_steps.push_back({0.037 * k, k % 3 == 0 ? 100 : 95});
+  for (int k = 1; k < 40; ++k) o.override_steps.emplace_back(0.037 * k, k % 3 == 0 ? 100 : 95);
   const RunResult r = run_checked(m, p, o, "override steps every 37 ms");
   std::size_t first = 0, last = 0;
   for (std::size_t i = 1; i < r.samples.size(); ++i) {
