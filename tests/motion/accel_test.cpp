@@ -281,17 +281,7 @@ TEST(AccelLimited, FullSmallBufferOfSegmentsShorterThanTheirCornerCapsDoesNotWai
 
 TEST(AccelLimited, RapidsReachTheRapidRateAndEventsHappenInOrder) {
   const MachineConfig m = test_machine();
-  Prog p;
-  p.rapid_to(Vec3{100, 50, 10});
-  p.aux('S', 12000, false);
-  p.aux('M', 3, true);
-  p.line_to(Vec3{100, 50, 0}, 2000);
-  p.dwell(0.25);
-  p.line_to(Vec3{150, 50, 0}, 5000);
-  p.aux('M', 8, false);
-  p.line_to(Vec3{150, 80, 0}, 5000, PathMode::kExactStop);
-  p.line_to(Vec3{120, 80, 0}, 5000);
-  p.aux('M', 5, false);
+  const Prog p = events_example();
   const RunResult r = run_checked(m, p);
   std::string order;
   for (const auto& s : r.samples) {
@@ -307,8 +297,7 @@ TEST(AccelLimited, RapidsReachTheRapidRateAndEventsHappenInOrder) {
 TEST(AccelLimited, OverrideStepsAndFeedHold) {
   const MachineConfig m = test_machine();
   RunOpts o = accel_opts();
-  o.override_steps = {{0.05, 200}, {0.31, 37},  {0.313, 150}, {0.5, 0},  {0.7, 120},
-                      {0.9, 10},   {0.95, 200}, {1.2, 75},    {1.4, 200}};
+  o.override_steps = p5_override_steps();
   run_checked(m, corner_example(6000), o);
   RunOpts h = accel_opts();
   h.hold_steps = {{0.2, true}, {0.6, false}};

@@ -209,17 +209,7 @@ TEST_P(BothModes, HelicesAndTurns) {
 
 TEST_P(BothModes, RapidsDwellAndAuxEvents) {
   const MachineConfig m = test_machine();
-  Prog p;
-  p.rapid_to(Vec3{100, 50, 10});
-  p.aux('S', 12000, false);
-  p.aux('M', 3, true);
-  p.line_to(Vec3{100, 50, 0}, 2000);
-  p.dwell(0.25);
-  p.line_to(Vec3{150, 50, 0}, 5000);
-  p.aux('M', 8, false);
-  p.line_to(Vec3{150, 80, 0}, 5000, PathMode::kExactStop);
-  p.line_to(Vec3{120, 80, 0}, 5000);
-  p.aux('M', 5, false);
+  const Prog p = events_example();
   const RunResult r = run(m, p.blocks, opts(GetParam()));
   const auto rep = check(m, p.blocks, r);
   EXPECT_TRUE(rep.ok()) << rep.summary();
@@ -255,8 +245,7 @@ TEST_P(BothModes, OverrideStepsKeepTheLimits) {
   const MachineConfig m = test_machine();
   const Prog p = corner_example(6000);
   RunOpts o = opts(GetParam());
-  o.override_steps = {{0.05, 200}, {0.31, 37},  {0.313, 150}, {0.5, 0},  {0.7, 120},
-                      {0.9, 10},   {0.95, 200}, {1.2, 75},    {1.4, 200}};
+  o.override_steps = p5_override_steps();
   const RunResult r = run(m, p.blocks, o);
   const auto rep = check(m, p.blocks, r);
   EXPECT_TRUE(rep.ok()) << rep.summary();

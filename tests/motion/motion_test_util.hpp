@@ -112,6 +112,30 @@ inline Prog corner_example(double feed = 10000) {
   return p;
 }
 
+// Rapids, a spindle start that waits (M3), a dwell, an exact stop and events that do not wait:
+// they must happen in the order S12000 M3 M8 M5.
+inline Prog events_example() {
+  Prog p;
+  p.rapid_to(Vec3{100, 50, 10});
+  p.aux('S', 12000, false);
+  p.aux('M', 3, true);
+  p.line_to(Vec3{100, 50, 0}, 2000);
+  p.dwell(0.25);
+  p.line_to(Vec3{150, 50, 0}, 5000);
+  p.aux('M', 8, false);
+  p.line_to(Vec3{150, 80, 0}, 5000, PathMode::kExactStop);
+  p.line_to(Vec3{120, 80, 0}, 5000);
+  p.aux('M', 5, false);
+  return p;
+}
+
+// P5: override steps (t_s, %) up and down at arbitrary cycles, also mid-corner of
+// corner_example(6000), through 0 and 200 %.
+inline std::vector<std::pair<double, double>> p5_override_steps() {
+  return {{0.05, 200}, {0.31, 37},  {0.313, 150}, {0.5, 0},  {0.7, 120},
+          {0.9, 10},   {0.95, 200}, {1.2, 75},    {1.4, 200}};
+}
+
 // The seed's example, a zig-zag of 2 mm strokes and a half circle: the post filter's contour
 // tolerance tests (corners of every sharpness, arcs).
 inline Prog contour_example() {

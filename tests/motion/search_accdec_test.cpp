@@ -135,8 +135,7 @@ TEST(SearchAccDec, StaircaseOfRoundedChordsRunsFasterThanTheAccelerationType) {
 TEST(SearchAccDec, OverrideStepsAndFeedHold) {
   const MachineConfig m = test_machine();
   RunOpts o = search_opts();
-  o.override_steps = {{0.05, 200}, {0.31, 37},  {0.313, 150}, {0.5, 0},  {0.7, 120},
-                      {0.9, 10},   {0.95, 200}, {1.2, 75},    {1.4, 200}};
+  o.override_steps = p5_override_steps();
   run_checked(m, corner_example(6000), o, "override steps");
   RunOpts h = search_opts();
   h.hold_steps = {{0.2, true}, {0.6, false}};
