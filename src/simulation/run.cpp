@@ -19,9 +19,7 @@
 
 #include "core/error.hpp"
 #include "core/spsc_ring.hpp"
-#include "feedcontrol/direction_correction.hpp"
-#include "planner/line_merge.hpp"
-#include "simulation/stepper.hpp"
+#include "simulation/block_source.hpp"
 
 namespace cncore::sim {
 
@@ -42,76 +40,36 @@ struct alignas(64) Item {
   ItemKind kind = ItemKind::kEnd;
 };
 
-// Interpreter → direction correction (spec 03) → collinear pieces merged (planner/line_merge):
-// one kernel block per call, reading source blocks only as needed, so memory stays bounded
-// whatever the program length. One interpreted block may give several kernel blocks (an arc
-// split by the direction correction), and several pieces one (a line merged).
+// The program's kernel blocks (simulation/block_source.hpp) as items for the motion cycle.
 class BlockProducer {
  public:
   BlockProducer(const std::string& program_path, const MachineConfig& machine,
                 const interp::Options& options, const motion::KernelOptions& kernel,
                 const OperatorModes& modes)
-      : modes_(modes),
-        interpreter_(program_path, machine, options),
-        corrector_(machine, program_path),
-        merger_(make_line_merger(machine, kernel)) {}
+      : source_(program_path, machine, options, kernel, modes) {}
 
   // Fills `item` (kBlock / kEnd / kInputError; the InputError in error()). Other exceptions
   // propagate.
   void next(Item& item) {
-    if (error_) {
-      // The line merged up to the error goes out first: the run stops at the end of the last
-      // good block, as without the merge.
-      item.kind = merger_.next(item.block) ? ItemKind::kBlock : ItemKind::kInputError;
-      return;
-    }
-    try {
-      item.kind = produce(item.block) ? ItemKind::kBlock : ItemKind::kEnd;
-    } catch (const InputError&) {
-      error_ = std::current_exception();
-      merger_.finish();
-      item.kind = merger_.next(item.block) ? ItemKind::kBlock : ItemKind::kInputError;
+    switch (source_.next(item.block)) {
+      case BlockSource::Status::kBlock:
+        item.kind = ItemKind::kBlock;
+        break;
+      case BlockSource::Status::kEnd:
+        item.kind = ItemKind::kEnd;
+        break;
+      case BlockSource::Status::kInputError:
+        item.kind = ItemKind::kInputError;
+        break;
     }
   }
 
-  std::exception_ptr error() const { return error_; }
+  std::exception_ptr error() const { return source_.error(); }
   // Motion blocks interpreted so far (the cycle reads it once the producer has ended).
-  std::uint64_t motion_blocks() const { return motion_blocks_; }
+  std::uint64_t motion_blocks() const { return source_.motion_blocks(); }
 
  private:
-  bool produce(Block& block) {
-    while (true) {
-      if (merger_.next(block)) return true;
-      if (corrector_.next(corrected_)) {
-        merger_.put(corrected_);
-        continue;
-      }
-      if (wait_pending_) {  // single-block stop: the wait after the block just handed on
-        wait_pending_ = false;
-        corrector_.put(wait_);
-        continue;
-      }
-      if (more_) more_ = interpreter_.next(source_);
-      if (!more_) {
-        merger_.finish();
-        return merger_.next(block);
-      }
-      if (is_motion(source_)) ++motion_blocks_;
-      wait_pending_ = apply_operator_modes(modes_, source_, wait_);
-      corrector_.put(source_);
-    }
-  }
-
-  OperatorModes modes_;
-  Block wait_;
-  bool wait_pending_ = false;
-  interp::Interpreter interpreter_;
-  feed::DirectionCorrector corrector_;
-  planner::LineMerger merger_;
-  Block source_, corrected_;
-  bool more_ = true;  // the interpreter may still produce blocks
-  std::uint64_t motion_blocks_ = 0;
-  std::exception_ptr error_;
+  BlockSource source_;
 };
 
 // The single-thread source: produces each item when the cycle asks for it.
