@@ -373,13 +373,15 @@ struct Kernel::Impl {
   // an override change there, which the look-ahead handles for any override ≤ ORmax).
   double cycle_or_ratio() {
     const double r = or_ratio;
-    if (!any_fixed || buf.empty()) return r;
+    if ((!any_fixed && rapid_or_ratio < 0) || buf.empty()) return r;
     const double cmd = acc.commanded_mm();
     cmd_idx = std::max(cmd_idx, buf.begin_index());
     if (cmd_idx >= buf.end_index()) return r;
     cmd_idx = buf.seek(cmd_idx, cmd);
     const Segment& seg = buf[cmd_idx];
-    return seg.kind == ItemKind::kMotion && seg.override_fixed ? 1.0 : r;
+    if (seg.kind != ItemKind::kMotion) return r;
+    if (seg.override_fixed) return 1.0;
+    return seg.rapid && rapid_or_ratio >= 0 ? rapid_or_ratio : r;
   }
 
   // Through the acc/dec's final type: direct (inlined) calls, no virtual dispatch.
@@ -456,7 +458,8 @@ struct Kernel::Impl {
 
   bool ended = false, started = false, hold = false;
   double override_pct = 100;
-  double or_ratio = 1;  // override_pct / 100 (set_override)
+  double or_ratio = 1;         // override_pct / 100 (set_override)
+  double rapid_or_ratio = -1;  // rapids' own ratio (set_rapid_override); < 0: or_ratio
   std::uint64_t cycle = 0;
   std::uint64_t out_idx = 0;
   std::uint64_t out_skip = 1;  // items the output cursor last moved by (advance_output's hint)
@@ -491,6 +494,10 @@ bool Kernel::step(Sample& out) {
 }
 void Kernel::set_override(double pct) {
   impl_->set_override(pct);
+}
+
+void Kernel::set_rapid_override(double pct) {
+  impl_->rapid_or_ratio = std::isfinite(pct) && pct >= 0 ? std::min(pct, 100.0) / 100.0 : -1;
 }
 void Kernel::set_feed_hold(bool hold) {
   impl_->hold = hold;

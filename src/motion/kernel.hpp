@@ -82,6 +82,10 @@ class Kernel {
 
   // Feed override in percent (0 … max_override_pct); takes effect at the next cycle.
   void set_override(double pct);
+  // Rapid override in percent (0 … 100) for G0 moves, which then no longer follow the feed
+  // override; a negative value makes rapids follow the feed override again (the default, as
+  // `cncore run --override` does). Takes effect at the next cycle.
+  void set_rapid_override(double pct);
   // Feed hold: decelerate along the path to a stop and wait; false resumes.
   void set_feed_hold(bool hold);
 
