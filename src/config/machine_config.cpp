@@ -16,6 +16,7 @@
 
 #include "config/adaptive_section.hpp"
 #include "config/cutting_config_toml.hpp"
+#include "config/servo_section.hpp"
 #include "config/toml_reader.hpp"
 #include "core/error.hpp"
 
@@ -485,10 +486,12 @@ MachineConfig parse_machine_config(std::string_view toml_text, const std::string
       read_direction_correction(r, key, r.table(key, node, k), c, correction_at);
     } else if (k == "adaptive") {
       config_detail::read_adaptive_section(source_name, key, node, c);
+    } else if (k == "servo") {
+      config_detail::read_servo_section(source_name, r.table(key, node, k), c.servo);
     } else {
       r.unknown(key, k,
                 " (sections are [motion], [axes.<x|y|z|a|b|c>], [interpreter], [tables], "
-                "[direction_correction], [stock], [[tools]], [cutting], [adaptive])");
+                "[direction_correction], [stock], [[tools]], [cutting], [adaptive], [servo])");
     }
   }
   validate_cutting_config(source_name, c.cutting, cutting_at);
@@ -636,6 +639,7 @@ std::string machine_config_to_toml(const MachineConfig& c) {
   }
   o += cutting_config_to_toml(c.cutting);
   o += config_detail::adaptive_section_to_toml(c);
+  o += config_detail::servo_section_to_toml(c.servo);
   return o;
 }
 

@@ -65,6 +65,20 @@ struct DirectionCorrectionConfig {
                          const DirectionCorrectionConfig&) = default;
 };
 
+// [servo] (`cncore serve`): the simulated axes' position loop, the following-error alarm, homing
+// against the simulated switches (at each axis's travel maximum) and jogging.
+struct ServoConfig {
+  double kp_per_s = 300;   // position-loop gain: velocity = ff·commanded velocity + kp·error
+  double feedforward = 1;  // velocity feed-forward, 0 … 1
+  double following_error_limit_mm = 1;  // |commanded − actual| above this raises an alarm
+  double home_search_mm_min = 1500;     // speed towards the switch
+  double home_latch_mm_min = 100;       // speed off the switch (the latch)
+  double home_pulloff_mm = 2;           // distance moved off the switch after the latch
+  double jog_feed_mm_min = 2000;        // jog feed when the request names none
+
+  friend bool operator==(const ServoConfig&, const ServoConfig&) = default;
+};
+
 struct MachineConfig {
   std::string name = "built-in 3-axis mill";
 
@@ -113,6 +127,9 @@ struct MachineConfig {
   // model (used as load source when its depth profile is not empty).
   feed::AdaptiveSettings adaptive;
   feed::PlantSettings adaptive_plant;
+
+  // [servo] (cncore serve)
+  ServoConfig servo;
 
   friend bool operator==(const MachineConfig&, const MachineConfig&) = default;
 
