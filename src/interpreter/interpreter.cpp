@@ -55,12 +55,19 @@ Interpreter::Impl::Impl(LineReader r, std::string name, const MachineConfig& m,
   ctx_.file = &file_;
   params_.set_live(this);
   for (std::size_t a = 0; a < kMaxAxes; ++a) pos_[a] = machine_.start_position[a];
-  params_.set_numbered(kParamCoordSystem, 1);
+  if (options.modal) modal_ = *options.modal;
+  params_.set_numbered(kParamCoordSystem, modal_.coord_system);
   for (const auto& [n, v] : options.params) {
     if (!Parameters::valid_number(n)) {
       throw InputError(file_, 0, 0, fmt::format("--param {}: no such parameter number", n));
     }
     params_.set_numbered(n, v);
+  }
+  // A saved active system (5220) selects it when no modal state is carried over.
+  if (const auto it = options.params.find(kParamCoordSystem);
+      it != options.params.end() && !options.modal) {
+    modal_.coord_system = std::clamp(static_cast<int>(std::lround(it->second)), 1, 9);
+    params_.set_numbered(kParamCoordSystem, modal_.coord_system);
   }
   for (const auto& [name_in, v] : options.named_params) {
     std::string key;

@@ -7,16 +7,21 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "config/machine_config.hpp"
 #include "core/block.hpp"
+#include "interpreter/modal_state.hpp"
 
 namespace cncore::interp {
 
 struct Options {
   std::map<int, double> params;                // --param N=V: numbered parameters #N
   std::map<std::string, double> named_params;  // --var NAME=V: named parameters #<NAME>
+  // The modal state to start in (a controller carries it from one MDI line or program to the
+  // next); none: the defaults (G17 G21 G90 G54 G64 G80).
+  std::optional<ModalState> modal;
 };
 
 class Interpreter {
@@ -40,6 +45,12 @@ class Interpreter {
   // when nothing can follow (the error was found at the end of the program). Later errors may
   // be consequences of the first (the failing line's modal changes may be half applied).
   bool recover();
+
+  // The numbered parameters first…last as they stand now (a controller keeps LinuxCNC's
+  // persistent range 5161…5390 between programs: offsets, G28/G30 positions).
+  std::map<int, double> numbered_parameters(int first, int last) const;
+  // The modal state as it stands now (see Options::modal).
+  ModalState modal_state() const;
 
  private:
   struct Impl;
