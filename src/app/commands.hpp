@@ -47,6 +47,22 @@ struct TableArgs {
 
 int command_table(const TableArgs& a);
 
+struct ServeArgs {
+  std::string machine, servo = "sim", state_dir, program, trajectory;
+  std::string grbl_tcp, grbl_pty, http;  // front ends that plug into the control interface
+  bool start = false, no_state = false, no_realtime = false;
+};
+
+int command_serve(const ServeArgs& a);
+
+struct LatencyArgs {
+  std::string machine, program;
+  double seconds = 10;
+  std::uint32_t period_us = 1000;
+};
+
+int command_latency(const LatencyArgs& a);
+
 // Prints the configuration (the built-in one for an empty path) as TOML.
 int command_machine(const std::string& machine_path);
 

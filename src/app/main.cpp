@@ -160,6 +160,39 @@ int main_cli(int argc, char** argv) {
                    "Print this configuration file with every default filled in")
       ->type_name("FILE.toml");
 
+  ServeArgs sa;
+  CLI::App* serve = app.add_subcommand(
+      "serve", "Run the controller: a paced motion cycle driven through its control interface.");
+  serve->add_option("--machine", sa.machine, "Machine configuration (default: built-in mill)")
+      ->type_name("FILE.toml");
+  serve->add_option("--servo", sa.servo, "Where set-points go: sim, udp:HOST:PORT or shm:NAME")
+      ->type_name("KIND");
+  serve
+      ->add_option("--state-dir", sa.state_dir,
+                   "Persistent machine state (default: $XDG_STATE_HOME/cncore)")
+      ->type_name("DIR");
+  serve->add_flag("--no-state", sa.no_state, "Keep no machine state between runs");
+  serve->add_option("--program", sa.program, "Load this program at start")->type_name("FILE.ngc");
+  serve->add_flag("--start", sa.start, "Start the --program at once");
+  serve->add_option("--trajectory", sa.trajectory, "Record every served cycle as CSV")
+      ->type_name("FILE.csv");
+  serve->add_flag("--no-realtime", sa.no_realtime, "Do not ask for SCHED_FIFO and mlockall");
+  serve->add_option("--grbl-tcp", sa.grbl_tcp, "Grbl 1.1 protocol over TCP")->type_name("ADDR");
+  serve->add_option("--grbl-pty", sa.grbl_pty, "Grbl 1.1 protocol on a pseudo-terminal")
+      ->type_name("PATH");
+  serve->add_option("--http", sa.http, "Operator web page")->type_name("ADDR");
+
+  LatencyArgs la;
+  CLI::App* latency = app.add_subcommand(
+      "latency", "Measure the cycle thread's wake-up latency and work, idle and with a program.");
+  latency->add_option("--seconds", la.seconds, "Total measuring time (half idle, half loaded)")
+      ->check(CLI::Range(0.2, 86400.0));
+  latency->add_option("--period-us", la.period_us, "Interpolation period")
+      ->check(CLI::Range(100U, 100000U));
+  latency->add_option("--program", la.program, "Program run in the loaded phase")
+      ->type_name("FILE.ngc");
+  latency->add_option("--machine", la.machine, "Machine configuration")->type_name("FILE.toml");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -169,6 +202,8 @@ int main_cli(int argc, char** argv) {
   if (*check) return command_check(ca);
   if (*table) return command_table(ta);
   if (*machine) return command_machine(machine_path);
+  if (*serve) return command_serve(sa);
+  if (*latency) return command_latency(la);
   return 2;
 }
 

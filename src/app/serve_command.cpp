@@ -1,0 +1,177 @@
+// `cncore serve`: the controller process (src/runtime) with its text console on standard input.
+#include <poll.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <csignal>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "app/cli_common.hpp"
+#include "app/commands.hpp"
+#include "app/serve_console.hpp"
+#include "io/trajectory_csv.hpp"
+#include "runtime/control.hpp"
+#include "runtime/persist.hpp"
+
+namespace cncore::app {
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+extern "C" void on_stop_signal(int /*sig*/) {
+  g_stop.store(true);
+}
+
+void install_stop_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;  // no SA_RESTART: poll() returns at once
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+runtime::ControllerOptions controller_options(const ServeArgs& a) {
+  runtime::ControllerOptions o;
+  if (a.servo == "sim") {
+    o.servo = runtime::ServoKind::kSim;
+  } else if (a.servo.starts_with("udp:")) {
+    o.servo = runtime::ServoKind::kUdp;
+    o.servo_address = a.servo.substr(4);
+  } else if (a.servo.starts_with("shm:") && a.servo.size() > 4) {
+    o.servo = runtime::ServoKind::kShm;
+    o.servo_address = a.servo.substr(4);
+  } else {
+    throw UsageError("--servo " + a.servo + ": expected sim, udp:HOST:PORT or shm:NAME");
+  }
+  o.state_dir =
+      a.no_state ? "" : (a.state_dir.empty() ? runtime::default_state_dir() : a.state_dir);
+  o.realtime = !a.no_realtime;
+  o.sample_ring = a.trajectory.empty() ? 0 : std::size_t{1} << 16;
+  return o;
+}
+
+// Writes the served cycles to a trajectory file while the controller runs (its own thread).
+class TrajectoryRecorder {
+ public:
+  TrajectoryRecorder(runtime::Controller& c, const std::string& path)
+      : controller_(c), writer_(path, c.machine(), io::TrajectoryColumns{true}) {
+    thread_ = std::thread([this] { run(); });
+  }
+  ~TrajectoryRecorder() {
+    if (thread_.joinable()) finish();
+  }
+  TrajectoryRecorder(const TrajectoryRecorder&) = delete;
+  TrajectoryRecorder& operator=(const TrajectoryRecorder&) = delete;
+  void finish() {
+    stop_.store(true);
+    thread_.join();
+    drain();
+    writer_.on_finish();
+    writer_.commit();
+  }
+
+ private:
+  void drain() {
+    while (true) {
+      const std::size_t n = controller_.read_samples(batch_);
+      for (std::size_t i = 0; i < n; ++i) writer_.on_sample(batch_[i]);
+      if (n < batch_.size()) return;
+    }
+  }
+  void run() {
+    while (!stop_.load()) {
+      drain();
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  }
+  runtime::Controller& controller_;
+  io::TrajectoryCsvWriter writer_;
+  std::vector<motion::Sample> batch_ = std::vector<motion::Sample>(1024);
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+void print_messages(runtime::Controller& c) {
+  while (auto m = c.take_message()) std::cout << "msg: " << *m << "\n";
+  std::cout.flush();
+}
+
+}  // namespace
+
+int command_serve(const ServeArgs& a) {
+  for (const auto& [option, value] :
+       {std::pair{"--grbl-tcp", &a.grbl_tcp}, std::pair{"--grbl-pty", &a.grbl_pty},
+        std::pair{"--http", &a.http}}) {
+    if (!value->empty()) {
+      throw UsageError(std::string(option) + ": this front end is not part of cncore yet; " +
+                       "drive the controller from standard input (docs/runtime.md)");
+    }
+  }
+  const MachineConfig machine = machine_from(a.machine);
+  const runtime::ControllerOptions options = controller_options(a);
+  if (!a.program.empty()) require_readable(a.program);
+  install_stop_handlers();
+  runtime::Controller controller(machine, options);
+  std::unique_ptr<TrajectoryRecorder> recorder;
+  if (!a.trajectory.empty()) {
+    recorder = std::make_unique<TrajectoryRecorder>(controller, a.trajectory);
+  }
+  std::cout << "cncore serve: " << machine.name << ", period " << machine.period_s * 1000
+            << " ms, servo " << a.servo << "; commands on stdin\n";
+  if (!a.program.empty()) {
+    const runtime::Result r = controller.load_program(a.program);
+    if (!r.ok) throw UsageError("--program: " + r.error);
+    if (a.start) {
+      const runtime::Result s = controller.cycle_start();
+      if (!s.ok) throw UsageError("--start: " + s.error);
+    }
+  }
+  print_messages(controller);
+  bool stdin_open = true;
+  bool quit = false;
+  std::string pending;
+  while (!g_stop.load() && !quit) {
+    pollfd p{STDIN_FILENO, POLLIN, 0};
+    const int rc = stdin_open ? ::poll(&p, 1, 100) : (::usleep(100000), 0);
+    if (rc > 0) {
+      char buf[4096];
+      const ssize_t n = ::read(STDIN_FILENO, buf, sizeof buf);
+      if (n <= 0) {
+        stdin_open = false;  // a daemon: runs on until SIGINT / SIGTERM
+      } else {
+        pending.append(buf, static_cast<std::size_t>(n));
+      }
+      for (auto nl = pending.find('\n'); nl != std::string::npos && !quit;
+           nl = pending.find('\n')) {
+        const std::string line = pending.substr(0, nl);
+        pending.erase(0, nl + 1);
+        const std::string answer = console_command(controller, line, quit);
+        if (!answer.empty()) std::cout << answer << "\n";
+        std::cout.flush();
+      }
+    }
+    print_messages(controller);
+  }
+  if (recorder) {
+    // The controlled stop happens in the controller's destructor; record it too.
+    controller.reset();
+    for (int i = 0; i < 60000; ++i) {
+      const runtime::MachineState s = controller.status().state;
+      if (s != runtime::MachineState::kRun && s != runtime::MachineState::kHold &&
+          s != runtime::MachineState::kJog && s != runtime::MachineState::kHoming) {
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    recorder->finish();
+  }
+  return 0;
+}
+
+}  // namespace cncore::app

@@ -1,0 +1,163 @@
+// The control interface of `cncore serve`: one object every front end (the command line, the
+// Grbl endpoint, the web page, telemetry) drives and reads. Front ends never reach into the
+// motion kernel: they send commands here and poll the published status.
+//
+// Threads behind it (docs/runtime.md): a cycle thread runs the motion kernel once per
+// interpolation period, paced by absolute-time sleeps, and never allocates, locks, logs or
+// blocks; a planning thread interprets programs and feeds their blocks ahead through a
+// lock-free ring. The methods below may be called from any thread (they serialise among
+// themselves) and return once the cycle thread has taken the command (within a cycle or two),
+// so a status read after a call sees its effect; none of them waits for the machine to move.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "config/machine_config.hpp"
+#include "core/geometry.hpp"
+#include "motion/kernel.hpp"
+#include "runtime/state_machine.hpp"
+
+namespace cncore::runtime {
+
+// Operator switches (they act on programs started after the change; optional stop at once).
+struct Switches {
+  bool optional_stop = false;  // M1 pauses like M0
+  bool single_block = false;   // pause after every motion block (cycle start goes on)
+  friend bool operator==(const Switches&, const Switches&) = default;
+};
+
+// What the cycle thread publishes every cycle (a consistent copy: see Controller::status()).
+struct Status {
+  MachineState state = MachineState::kIdle;
+  bool hold_complete = false;  // Hold: the tool has stopped (false: still decelerating)
+  bool resetting = false;      // a reset is stopping the tool; Idle follows
+  AlarmCode alarm = AlarmCode::kNone;
+  std::uint32_t alarm_line = 0;  // program line of a program or soft-limit alarm
+  bool homed = false;
+  bool program_loaded = false;
+  bool check_mode = false;
+  std::uint64_t cycle = 0;             // cycles since the controller started
+  std::uint64_t applied_commands = 0;  // commands the cycle has taken (see Controller)
+  std::uint64_t job = 0;  // serial number of the program / MDI / jog / homing running or last run
+  AxisVec commanded;      // set-points sent to the servos (machine coordinates, mm or deg)
+  AxisVec actual;         // the servos' feedback
+  AxisVec work_offset;    // active work offset (G54…G59.3 + G92), as the planner last saw it
+  double following_error_mm = 0;  // largest |commanded − actual| over the axes this cycle
+  std::uint32_t line = 0;         // program line under the tool (0: none)
+  double feed_mm_min = 0;         // path speed this cycle
+  double feed_override_pct = 100;
+  double rapid_override_pct = 100;
+  double load_pct = 0;                // spindle load (0 without a load source)
+  std::uint32_t blocks_queued = 0;    // blocks planned ahead of the kernel (ring)
+  std::uint64_t overruns = 0;         // cycles that started after their deadline
+  std::uint64_t starved_cycles = 0;   // cycles whose kernel wanted a block the planner lacked
+  std::uint64_t samples_dropped = 0;  // samples the reader of read_samples() did not take in time
+  double cycle_work_max_us = 0;       // longest cycle work so far
+  Switches switches;
+};
+
+// A jog: a straight move of the axes at a feed, incremental or to an absolute machine position,
+// or continuous along a direction until cancelled; it stops at the travel limits.
+struct JogRequest {
+  AxisVec target;  // absolute: machine position; incremental: distance; continuous: direction
+  std::uint32_t axes = 0;  // bit per axis slot that the jog moves
+  bool incremental = true;
+  bool continuous = false;
+  double feed_mm_min = 0;  // 0: [servo] jog_feed_mm_min
+};
+
+struct Result {
+  bool ok = true;
+  std::string error;  // why not, for the operator (a program error: FILE:LINE:COL: error: …)
+  static Result fail(std::string why) { return {false, std::move(why)}; }
+};
+
+// A command as the cycle thread applied it, with the cycle at which it took effect (what a test
+// replays against `cncore run` to compare set-points cycle by cycle).
+struct AppliedCommand {
+  std::uint64_t cycle = 0;  // the first cycle that ran with it
+  Command command = Command::kStart;
+  double value = 0;  // overrides: percent; hold: 1 hold / 0 resume
+};
+
+// What the cycle thread measured of itself since the figures were last reset: how late it woke
+// after each cycle's due time, and how long each cycle's work took (µs).
+struct CycleFigures {
+  std::uint64_t cycles = 0;
+  double wake_p50_us = 0, wake_p99_us = 0, wake_p999_us = 0, wake_max_us = 0;
+  double work_p50_us = 0, work_p99_us = 0, work_p999_us = 0, work_max_us = 0;
+  std::uint64_t overruns = 0;
+};
+
+enum class ServoKind : std::uint8_t { kSim, kUdp, kShm };
+
+struct ControllerOptions {
+  ServoKind servo = ServoKind::kSim;
+  std::string servo_address;      // udp: HOST:PORT; shm: NAME
+  std::string state_dir;          // persistent machine state; empty: none kept
+  bool realtime = true;           // try SCHED_FIFO + mlockall (reported when not allowed)
+  bool paced = true;              // false: cycles run back to back (tests: same set-points, faster)
+  std::size_t block_ring = 4096;  // planner → cycle (power of two)
+  std::size_t sample_ring = 1U << 16;  // cycle → read_samples() (power of two; 0: no samples)
+  // Tests with paced = false: the cycle waits for the reader instead of dropping samples. Never
+  // on a machine: it makes the cycle wait on another thread.
+  bool lossless_samples = false;
+  // Simulated machine: where the axes really are relative to the controller's belief at start
+  // (homing finds it), mm per axis slot.
+  AxisVec sim_position_error;
+};
+
+class Controller {
+ public:
+  // Starts the threads. Throws InputError on a bad state file, std::runtime_error when a servo
+  // output cannot be opened.
+  Controller(const MachineConfig& machine, const ControllerOptions& options);
+  // Stops the machine in a controlled way (a running program decelerates on its path), saves the
+  // state and joins the threads.
+  ~Controller();
+  Controller(const Controller&) = delete;
+  Controller& operator=(const Controller&) = delete;
+
+  // A consistent copy of the latest published status (wait-free for the cycle thread).
+  Status status() const;
+  const MachineConfig& machine() const;
+  // Messages for the operator that arose outside a command (a program error met while running,
+  // the real-time set-up): taken once each.
+  std::optional<std::string> take_message();
+
+  // The program checked as a whole before anything moves (travel limits, syntax): the first
+  // error is returned at its line and nothing is loaded.
+  Result load_program(const std::string& path);
+  Result cycle_start();  // Idle with a program: run it; Hold: resume
+  Result feed_hold();
+  Result reset();        // controlled stop; the program ends; alarms other than E-stop clear
+  Result estop();        // set-points frozen from the next cycle; alarm latched
+  Result clear_alarm();  // unlock after an alarm (the E-stop too)
+  Result jog(const JogRequest& request);
+  Result jog_cancel();
+  Result home();
+  Result mdi(const std::string& line);  // one or more lines of G-code, run at once
+  Result set_feed_override(double pct);
+  Result set_rapid_override(double pct);
+  Result set_switches(const Switches& switches);
+  Result set_check_mode(bool on);  // Check: programs are interpreted, nothing moves
+
+  // Samples of the cycles run so far, oldest first, as many as fit (one reader only). Samples the
+  // reader leaves too long are dropped (Status::samples_dropped).
+  std::size_t read_samples(std::span<motion::Sample> out);
+  std::size_t read_applied(std::span<AppliedCommand> out);
+  // The cycle thread's figures (it computes them between two cycles when asked; waits ≤ 1 s).
+  // reset: start counting afresh after this reading.
+  CycleFigures cycle_figures(bool reset);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace cncore::runtime
