@@ -144,8 +144,8 @@
 //    c − W + (T2 − 1)/2·V = c. Likewise x_{T2−1} < e + W. So it averages only steps ≤ V. Its
 //    acceleration averages the step changes over one commanded step more: (T2 + 1)/2·V. The
 //    post filter averages axis positions off the path; it keeps its whole Tp·V. So, with
-//    cap_lag = (T2 − 1)/2 + Tp and reach_lag = (T2 + 1)/2 + Tp (both T2 + Tp until session 16:
-//    zigzag_0.002 at T2 = 4 ran 34.54 s, now 26.54):
+//    cap_lag = (T2 − 1)/2 + Tp and reach_lag = (T2 + 1)/2 + Tp (a reach of T2 + Tp for both ran
+//    zigzag_0.002 at T2 = 4 in 34.54 s, these in 26.54):
 //      - every cap reaches cap_lag·V further on both sides, a corner
 //        [j − (1 + cap_lag)·Vg, j + (1 + cap_lag)·Vg);
 //      - a joint zone (7.) spans [j − (2 + reach_lag)·V, j + (1 + reach_lag)·V] (past b into the

@@ -226,11 +226,11 @@ bool AccelLimitedAccDec::rezone_before(const LastZone& z, std::uint64_t index_b,
   // corner of line-contouring-xz: 6.8 against 14.8 µm/cycle). Sized and capped a little below
   // it, V_r = that − A0/2, the zone's speed change is the larger one of the lower V; the cap
   // costs a cycle's rounding where the tool would have passed faster, so only where it raises
-  // the zone's D by 20 % or more (a choice, not a bound: each V with its cap is sound; the
-  // measured trade is in bench/README.md, "Session 15"). Only where the tool can follow the new
-  // cap (its key's bound at the tool, with σ as now — the new zone only raises r — is at least
-  // the last step, 3. (ii)), and no committed step of 11. or step on 10.'s curve relies on what
-  // is ahead.
+  // the zone's D by 20 % or more (a choice, not a bound: each V with its cap is sound; on
+  // line-contouring-xz and circle_small_segments it gains 0.3–0.7 %). Only where the tool can
+  // follow the new cap (its key's bound at the tool, with σ as now — the new zone only raises r —
+  // is at least the last step, 3. (ii)), and no committed step of 11. or step on 10.'s curve relies
+  // on what is ahead.
   double d = -1;  // plain_zone_d() at v, once computed
   if (const double v_r = std::max(vc, std::sqrt(vc * vc + 2 * a0_ * b.length_mm) - 0.5 * a0_);
       v_r < v && !commit_.valid && relied_e_mm_ == kInf) {

@@ -166,8 +166,8 @@ double SampleSearch::brake_distance(double d, double c) const {
 // k·c' + a·k·(k+1)/2; the first k where that reaches room, from (a/2)·k² + (c' + a/2)·k = room,
 // holds the answer: d < (room + a·k·(k+1)/2)/k there, and never below the interval's foot
 // c' + k·a (the jump). The closed form then moves by ulps to the largest double below the
-// bound (a bisection of 60 steps before: most of the search's time on a window of 10 000
-// short segments, walked back each time one arrives).
+// bound (a bisection would take 60 steps per joint, walked back over the braking distance each
+// time a segment arrives: most of the search's time on a window of 10 000 short segments).
 double SampleSearch::brake_limit(double c, double room) const {
   const double c1 = c + kRound;
   const double b = c1 + a_ / 2;
