@@ -5,7 +5,7 @@ PRESET ?= release
 BUILD  := build/$(PRESET)
 CNCORE := $(BUILD)/src/app/cncore
 
-DEB_PACKAGES := cmake ninja-build g++ make pkg-config \
+DEB_PACKAGES := cmake ninja-build g++ make pkg-config python3 \
   libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev libfast-float-dev \
   libmuparser-dev libgtest-dev libgmock-dev libbenchmark-dev librapidcheck-dev libpng-dev time \
   chromium

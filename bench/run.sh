@@ -9,7 +9,7 @@
 #   --quick      skip the 1 000 000-line CAM program and the 100x refined stress test
 #   --no-gbench  skip bench_interpreter / bench_motion
 #   --no-stop    skip the stop-mode runs (stop_s and stop/b left empty)
-#   --accdec T   also pass `--accdec T` to `cncore run` (acc/dec type, issue 9), when supported
+#   --accdec T   also pass `--accdec T` to `cncore run` (acc/dec type), when supported
 #   --machine F  run and bound on machine F (e.g. one with a jerk limit: the bound ignores jerk,
 #                so look/b then includes what the jerk stage costs)
 #   --only RE    run only the programs whose path matches the extended regex RE

@@ -54,7 +54,7 @@
 // checked for the next joints of every state, each on its own).
 //
 // --certify asks what a planner that ran this search ahead of the tool could hand the cycle
-// (docs/lookahead.md, "A sample search ahead of the tool"). Every 64 cycles, the cycles whose
+// (docs/lookahead.md, "The search type"). Every 64 cycles, the cycles whose
 // history holds one state are *committed*: every live state descends from them, so a planner
 // could give them to the cycle. Each committed state is then braked greedily (the smallest
 // feasible step every cycle) until the tool rests; a state that comes to rest so has a safe

@@ -130,7 +130,7 @@ TEST(BoundCoupled, LineAcceleratesAtTheAxisShare) {
   b.feed_mm_min = 6000;
   const double a = 1000 * std::sqrt(2.0), l = 100 * std::sqrt(2.0), v = 100;
   EXPECT_NEAR(optimal_time_s({b}, lim), v / a + l / v, 1e-12);
-  // The first bound used Amax = 2000 along the line.
+  // The simple model uses Amax = 2000 along the line.
   EXPECT_NEAR(optimal_time_s({b}, lim, Model::kSimple), v / 2000 + l / v, 1e-12);
 }
 
@@ -309,7 +309,7 @@ TEST(BoundHonesty, ZigzagHasACheckedTrajectoryWithin5PercentOfTheBound) {
   EXPECT_TRUE(rep.ok()) << rep.summary();
   const double t = tau * static_cast<double>(cycles.size());
   EXPECT_LE(bound, t);         // a lower bound of a checked trajectory
-  EXPECT_LE(t, 1.05 * bound);  // and within issue 9's 1.05: the corners cost sampling little
+  EXPECT_LE(t, 1.05 * bound);  // and within 1.05 of it: the corners cost sampling little
   std::printf("zigzag %d strokes: bound %.6f s, checked trajectory %.3f s (%.4f)\n", strokes, bound,
               t, t / bound);
 }

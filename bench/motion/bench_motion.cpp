@@ -1,4 +1,4 @@
-// Motion-kernel speed (issue 3, spec 01 P7): interpolation cycles per second without any
+// Motion-kernel speed (spec 01 P7): interpolation cycles per second without any
 // trajectory output, per-cycle latency percentiles and the worst single cycle with a
 // 10 000-block look-ahead window, on `ugs/stress_test.gcode` and the same path cut into 100×
 // finer segments, and the kernel's memory against program length.
@@ -653,7 +653,7 @@ int main(int argc, char** argv) {
       benchmark::RegisterBenchmark(("LineMerge/" + p.name).c_str(), BM_LineMerge, &p)
           ->Unit(benchmark::kMillisecond);
   }
-  // The search type (issue 9) searches ~20–70 µs per cycle: measured on the programs without the
+  // The search type searches ~20–70 µs per cycle: measured on the programs without the
   // 100× refinement only, to keep the run short.
   for (int type = 0; type < 3; ++type) {
     for (LazyProgram& p : progs) {

@@ -1,4 +1,4 @@
-// Pipeline speed (issue 3): interpolation cycles per second of the whole `sim::run_program`
+// Pipeline speed: interpolation cycles per second of the whole `sim::run_program`
 // (interpreter → direction correction → Kernel::push → Kernel::step, no observer: no
 // trajectory output), with the program interpreted on a producer thread that hands the blocks
 // to the cycle through the SPSC ring (RunOptions::producer_thread), against the single-thread

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Cycles per second of whole `cncore run` commands (issue 3: "throughput without trajectory
-output"), one or more binaries alternated, best of N.
+"""Cycles per second of whole `cncore run` commands (throughput without trajectory
+output), one or more binaries alternated, best of N.
 
   bench/pipeline/whole_run.py BIN[,BIN2...] [N]      (N runs per binary and program, default 3)
 

@@ -1,8 +1,8 @@
 // The acc/dec type: the part of the motion cycle that turns the programmed feed, the passing
 // speeds of the buffer and the override into the tool's position along the path, one cycle at a
-// time. The buffer, the geometry and the shape interpolation do not depend on it, so a second
-// type (issue 9: constant-acceleration planning before interpolation) plugs in behind this
-// interface without touching them.
+// time. The buffer, the geometry and the shape interpolation do not depend on it, so each type
+// (the moving average, constant-acceleration planning before interpolation, the sample search)
+// plugs in behind this interface without touching them.
 #pragma once
 
 #include <cstdint>

@@ -1,7 +1,8 @@
-// The acceleration-limited acc/dec type before interpolation (issue 9): the tool's path speed
-// changes by at most the acceleration limit per cycle, every speed limit ahead is met by braking
-// just in time, and there is no filter delay. The derivation is at the top of
-// accel_limited.cpp.
+// The acceleration-limited acc/dec type before interpolation: the tool's path speed changes by
+// at most the acceleration limit per cycle, every speed limit ahead is met by braking just in
+// time, and there is no filter delay. The derivation is in comments at the top of the
+// accel_limited*.cpp files (accel_limited.cpp lists which part is where); the numbers in the
+// comments below (7., 9., …) are its sections.
 #pragma once
 
 #include <array>

@@ -21,8 +21,8 @@ enum class Mode : std::uint8_t {
 // The acc/dec type of look-ahead mode (stop mode always uses the moving average).
 enum class AccDecType : std::uint8_t {
   kMovingAverage,  // the seed's: look-ahead limit + moving average of T (+ T2) cycles
-  kAcceleration,   // issue 9: constant-acceleration planning before interpolation
-  kSearch,         // issue 9: samples searched ahead of the tool (motion/search_accdec.hpp)
+  kAcceleration,   // constant-acceleration planning before interpolation
+  kSearch,         // samples searched ahead of the tool (motion/search_accdec.hpp)
 };
 
 struct KernelOptions {

@@ -1,9 +1,9 @@
-// A sample search ahead of the tool (issue 9; design in docs/lookahead.md, "A sample search
-// ahead of the tool"). The look-ahead's zones must hold for every placement of the samples; on a
-// staircase of alternating micro-corners (a circle of rounded short chords) that costs ~15 %
-// against the time-optimal bound. This stage instead searches over where the samples land: a
-// beam of states (s_prev, s), one cycle at a time, under the trajectory checker's own rules, run
-// ahead of the tool. The cycle only reads committed samples.
+// A sample search ahead of the tool (design in docs/lookahead.md, "The search type"). The
+// look-ahead's zones must hold for every placement of the samples; on a staircase of alternating
+// micro-corners (a circle of rounded short chords) that costs ~15 % against the time-optimal bound.
+// This stage instead searches over where the samples land: a beam of states (s_prev, s), one cycle
+// at a time, under the trajectory checker's own rules, run ahead of the tool. The cycle only reads
+// committed samples.
 //
 //   push(segment) ──▶ window ──▶ advance(): beam at the front cycle F
 //                                   │ lineages coalesce, or a commit is forced after L cycles

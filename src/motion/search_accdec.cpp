@@ -71,9 +71,9 @@ void SearchAccDec::step(const CycleInput& in) {
     // ring or the window's end stops it) and the search's work is spread over the cycles; it
     // came in bursts when the committed samples ran out (a worst cycle of 1.9 ms on random_2k).
     // When nothing committed waits (the start, a resume, an override change), the search goes
-    // on until its lineages coalesce: committing earlier, from a beam a few cycles deep, made
-    // the beam die and the tool brake to rest after frequent override changes (tried, session
-    // 21: 1–7 recoveries on a rounded circle with a restart every 7–64 cycles, none without).
+    // on until its lineages coalesce: committing earlier, from a beam a few cycles deep, makes
+    // the beam die and the tool brake to rest after frequent override changes (1–7 recoveries on
+    // a rounded circle with a restart every 7–64 cycles, none without).
     const int budget = search_.ready() < kLeadSamples ? kCatchUpCyclesPerCycle : 1;
     for (int i = 0; i < budget && search_.advance(false); ++i) {
     }

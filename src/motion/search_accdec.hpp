@@ -1,12 +1,12 @@
-// The acc/dec type "search" (issue 9): the tool follows the samples of a search ahead of it
+// The acc/dec type "search": the tool follows the samples of a search ahead of it
 // (motion/sample_search.hpp) instead of a speed profile over the caps. It plans each cycle's
 // sample under the checker's own rules and places the samples where a staircase of
 // micro-corners cancels within a pair of steps, which the acceleration type's zones cannot.
 //
-// Not real-time yet: step() runs the search until a sample is committed (~20–40 µs a cycle on
+// Not real-time: step() runs the search until a sample is committed (~20–40 µs a cycle on
 // average, up to the commit lag's L cycles of search after an override change); a controller
 // would run it in its planning thread. Without a jerk stage and a post filter only. See
-// docs/lookahead.md, "A sample search ahead of the tool".
+// docs/lookahead.md, "The search type".
 #pragma once
 
 #include <cstddef>

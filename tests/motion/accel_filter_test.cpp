@@ -1,4 +1,4 @@
-// The acceleration-limited acc/dec type with a filter after it (issue 9; accel_limited.cpp, 8.):
+// The acceleration-limited acc/dec type with a filter after it (accel_limited.cpp, 8.):
 // the jerk stage (moving average of T2 cycles on the path position) and the post-interpolation
 // filter with its contour tolerance. Everything is measured on the produced positions by the
 // independent checker (tests/support): speed, tangential/normal/per-axis acceleration, tangential

@@ -1,9 +1,9 @@
-// Late blocks with a filter after the acceleration-limited type (issue 9; accel_limited.cpp, 6.
-// and 8.). A block is *late* when the producer delivers it only after the tool has started to
-// brake for the window's last end point (a stop until its successor arrives). With a jerk stage
-// (T2) and/or the post-interpolation filter (Tp) the output averages the commanded steps of the
-// last lag = T2 + Tp cycles, so the caps of the late block (a corner, a slower feed, an arc) reach
-// lag·V behind their position — possibly behind the commanded position, over steps that are
+// Late blocks with a filter after the acceleration-limited type (accel_limited_late.cpp, 6.;
+// accel_limited.cpp, 8.). A block is *late* when the producer delivers it only after the tool has
+// started to brake for the window's last end point (a stop until its successor arrives). With a
+// jerk stage (T2) and/or the post-interpolation filter (Tp) the output averages the commanded steps
+// of the last lag = T2 + Tp cycles, so the caps of the late block (a corner, a slower feed, an arc)
+// reach lag·V behind their position — possibly behind the commanded position, over steps that are
 // already in the filter. Without a filter too (the first filter of each sweep; 6.): a late cap's
 // key may bind below the braking tool's step. Everything is measured on the produced positions by
 // the independent checker (tests/support): path speed and joint speed, tangential/normal/per-axis

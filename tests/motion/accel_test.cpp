@@ -1,4 +1,4 @@
-// The acceleration-limited acc/dec type (issue 9), end to end: the same programs as the
+// The acceleration-limited acc/dec type, end to end: the same programs as the
 // moving-average tests (kernel_test.cpp) through the kernel with AccDecType::kAcceleration, the
 // trajectory measured by the independent checker (tests/support) — P1–P5 of spec 01 — plus what
 // is specific to this type: time against the closed-form optimum, rapids at the rapid rate,
@@ -756,9 +756,9 @@ TEST(AccelLimited, CentredCornersInsideJointZonesUnderAHoldOrAnOverrideDropAtEve
 
 // cam-short-segments' rosette r = 30 + 6·sin(6φ) mm, two lobes in 400 chords of 0.13–0.2 mm at
 // F 6 000 after a 30 mm line (every axis at Amax): the tool brakes and speeds up through the
-// joint zones of its 0.5–4° corners. 1.441 s before session 10; 1.430 s once σ ran the zones'
-// decreases at their own r (7.); 1.418 s with the line's own r for the rise where the pair at
-// the tool lies on one line (4.).
+// joint zones of its 0.5–4° corners: 1.441 s with the zones' r for decreases and increases alike;
+// 1.430 s with σ running the zones' decreases at their own r (7.); 1.418 s with the line's own
+// r for the rise where the pair at the tool lies on one line (4.).
 TEST(AccelLimited, RosetteOfShortChordsBrakesAndRisesAtTheZonesOwnLimits) {
   const MachineConfig m = centred_machine();
   Prog p;

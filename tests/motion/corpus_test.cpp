@@ -1,7 +1,7 @@
 // The shared third-party corpus (CNCORE_SHARED_DIR/testdata/gcode) through the whole simulated
 // machine: every program that `cncore check` accepts on the built-in machine runs through
 // sim::run_program (the driver of `cncore run`) in look-ahead mode with both acc/dec types (the
-// seed's moving average and the acceleration-limited type of issue 9) and in stop mode, and the
+// seed's moving average and the acceleration-limited type) and in stop mode, and the
 // in-memory samples go to the independent checker (tests/support), which must find no violation of
 // spec 01 P1–P4 (path ≤ 1 µm, speeds, joint speeds, accelerations, end point ≤ 1e-9 mm at rest).
 // One ctest test per program × mode. Programs absent from the folder are skipped.
@@ -31,7 +31,7 @@ fs::path corpus_dir() {
   return fs::path(CNCORE_SHARED_DIR) / "testdata" / "gcode";
 }
 
-// A violation measured on a corpus program and reported (issue 3). The case still runs: every
+// A violation measured on a corpus program and reported. The case still runs: every
 // other property must hold, the listed properties may not exceed max_value_mm_s, and the case is
 // then skipped with the text; when the violation is no longer measured the case fails so that
 // the entry is removed.
@@ -50,7 +50,7 @@ struct CorpusProgram {
   bool stop_mode = true;
   KnownViolation lookahead{};
   KnownViolation stop{};
-  KnownViolation acceleration{};  // look-ahead with the acceleration-limited type (issue 9)
+  KnownViolation acceleration{};  // look-ahead with the acceleration-limited type
   // Also run with the acc/dec type "search" (~20–40 µs of search per cycle): the programs of
   // fewer than ~100 000 cycles.
   bool search = false;
@@ -105,7 +105,7 @@ const CorpusProgram kPrograms[] = {
 struct Case {
   CorpusProgram program;
   Mode mode = Mode::kLookahead;
-  AccDecType accdec = AccDecType::kMovingAverage;  // look-ahead's acc/dec type (issue 9)
+  AccDecType accdec = AccDecType::kMovingAverage;  // look-ahead's acc/dec type
   bool jerk = false;  // acceleration type with a jerk stage of T2 = 4 cycles (Jmax 10⁶ mm/s³)
   bool post_filter = false;  // acceleration type with an 8-cycle post-interpolation filter
 };
@@ -221,7 +221,7 @@ TEST_P(CorpusRun, KeepsP1ToP4) {
               case_suffix(c), static_cast<unsigned long long>(counts.blocks), rec.traj.size(),
               rec.traj.t_s.back());
   if (known.text != nullptr && !HasFailure()) {
-    GTEST_SKIP() << "known violation: " << known.text << " (see issues 3 and 9)\n" << details(rep);
+    GTEST_SKIP() << "known violation: " << known.text << "\n" << details(rep);
   }
 }
 

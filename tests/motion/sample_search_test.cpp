@@ -1,4 +1,4 @@
-// The sample search (motion/sample_search.hpp, issue 9): its samples go to the independent
+// The sample search (motion/sample_search.hpp): its samples go to the independent
 // checker (P1–P4 by finite differences), and its cycle count is compared with the acceleration
 // type's on the same blocks. Nothing here reads the search's own variables except its counters
 // (forced commits, recoveries) to show that a case exercised them.

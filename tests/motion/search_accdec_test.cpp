@@ -153,7 +153,7 @@ TEST(SearchAccDec, OverrideStepsAndFeedHold) {
 // An operator turning the override knob: a step every 37 ms on the staircase of rounded chords.
 // Each step replans from the tool's sample; the new plan must neither break a limit nor bring
 // the tool to rest (a death of the search is met by a brake to rest: committing from a beam only
-// a few cycles deep to keep the replanning cycle short did that 2 times here, session 21).
+// a few cycles deep, to keep the replanning cycle short, does that 2 times here).
 TEST(SearchAccDec, FrequentOverrideStepsNeverBringTheToolToRest) {
   const MachineConfig m = test_machine();
   const Prog p = rounded_circle(30);
