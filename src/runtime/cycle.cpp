@@ -73,7 +73,12 @@ void CycleLoop::apply(const CycleCommand& c, std::uint64_t n) {
   switch (c.command) {
     case Command::kStart:
     case Command::kMdi:
-      if (c.job != nullptr && job_ == nullptr) start_job(c.job);
+      if (c.job != nullptr && job_ == nullptr) {
+        start_job(c.job);
+      } else if (c.job != nullptr) {  // one job at a time: the planner frees this one
+        c.job->cancel.store(true, std::memory_order_release);
+        c.job->retired.store(true, std::memory_order_release);
+      }
       break;
     case Command::kResume:
       if (job_ != nullptr) job_->kernel.set_feed_hold(false);
@@ -81,6 +86,52 @@ void CycleLoop::apply(const CycleCommand& c, std::uint64_t n) {
       status_.state = MachineState::kRun;
       status_.hold_complete = false;
       break;
+    case Command::kHold:
+    case Command::kReset:
+    case Command::kJog:
+    case Command::kJogCancel:
+    case Command::kHome:
+      apply_stop_or_move(c, moving_alone);
+      break;
+    case Command::kEStop:
+      line_ = LineMotion{};  // set-points frozen from this cycle on
+      jog_pending_ = false;
+      raise_alarm(AlarmCode::kEStop, status_.line);
+      break;
+    case Command::kClearAlarm:
+      if (status_.state == MachineState::kAlarm) {
+        status_.state = MachineState::kIdle;
+        status_.alarm = AlarmCode::kNone;
+        status_.alarm_line = 0;
+      }
+      break;
+    case Command::kFeedOverride:
+      status_.feed_override_pct = c.value;
+      if (job_ != nullptr) job_->kernel.set_override(c.value);
+      break;
+    case Command::kRapidOverride:
+      status_.rapid_override_pct = c.value;
+      rapid_set_ = true;
+      if (job_ != nullptr) job_->kernel.set_rapid_override(c.value);
+      break;
+    case Command::kSwitches:
+      status_.switches = c.switches;
+      break;
+    case Command::kCheckOn:
+      status_.state = MachineState::kCheck;
+      break;
+    case Command::kCheckOff:
+      status_.state = MachineState::kIdle;
+      break;
+    case Command::kLoad:
+    case Command::kCount:
+      break;
+  }
+}
+
+// Hold, reset, jog and homing: what they do depends on what moves now.
+void CycleLoop::apply_stop_or_move(const CycleCommand& c, bool moving_alone) {
+  switch (c.command) {
     case Command::kHold:
       if (job_ != nullptr && status_.state == MachineState::kRun) {
         job_->kernel.set_feed_hold(true);
@@ -99,18 +150,6 @@ void CycleLoop::apply(const CycleCommand& c, std::uint64_t n) {
         line_.stop();
         jog_pending_ = false;
         status_.resetting = true;
-      }
-      break;
-    case Command::kEStop:
-      line_ = LineMotion{};  // set-points frozen from this cycle on
-      jog_pending_ = false;
-      raise_alarm(AlarmCode::kEStop, status_.line);
-      break;
-    case Command::kClearAlarm:
-      if (status_.state == MachineState::kAlarm) {
-        status_.state = MachineState::kIdle;
-        status_.alarm = AlarmCode::kNone;
-        status_.alarm_line = 0;
       }
       break;
     case Command::kJog: {
@@ -139,26 +178,7 @@ void CycleLoop::apply(const CycleCommand& c, std::uint64_t n) {
         start_homing_axis();
       }
       break;
-    case Command::kFeedOverride:
-      status_.feed_override_pct = c.value;
-      if (job_ != nullptr) job_->kernel.set_override(c.value);
-      break;
-    case Command::kRapidOverride:
-      status_.rapid_override_pct = c.value;
-      rapid_set_ = true;
-      if (job_ != nullptr) job_->kernel.set_rapid_override(c.value);
-      break;
-    case Command::kSwitches:
-      status_.switches = c.switches;
-      break;
-    case Command::kCheckOn:
-      status_.state = MachineState::kCheck;
-      break;
-    case Command::kCheckOff:
-      status_.state = MachineState::kIdle;
-      break;
-    case Command::kLoad:
-    case Command::kCount:
+    default:
       break;
   }
 }

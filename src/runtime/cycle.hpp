@@ -46,6 +46,7 @@ class CycleLoop {
 
  private:
   void apply(const CycleCommand& c, std::uint64_t n);
+  void apply_stop_or_move(const CycleCommand& c, bool moving_alone);
   void start_job(Job* job);
   void retire_job();
   void program_cycle(motion::Sample& s);

@@ -24,7 +24,7 @@ console)
   grep -q "error: unknown command 'frobnicate'" <<<"$out" || fail "unknown command not reported"
   grep -q 'error: feed override must be between 0 and 200' <<<"$out" || fail "bad override accepted"
   # SIGTERM while a program runs: a controlled stop, exit 0, the position saved.
-  "$cncore" serve --state-dir "$tmp/state" --no-realtime \
+  "$cncore" serve --state-dir "$tmp/state" --no-realtime --trajectory "$tmp/served.csv" \
       --program "$src/examples/pocket-with-arcs.ngc" --start </dev/null >"$tmp/serve.log" 2>&1 &
   pid=$!
   sleep 1.5
@@ -34,6 +34,9 @@ console)
   [ "$rc" -eq 0 ] || fail "SIGTERM: exit code $rc"
   grep -q '"position"' "$tmp/state/machine-state.json" || fail "no state saved"
   grep -q 'cncore-machine-state-1' "$tmp/state/machine-state.json" || fail "state file format"
+  # The recorded cycles: a header and one row per served cycle (≥ 1 s of them).
+  head -1 "$tmp/served.csv" | grep -q '^t,line,x,y,z,feed' || fail "trajectory header"
+  [ "$(wc -l <"$tmp/served.csv")" -gt 1000 ] || fail "trajectory too short"
   # Reserved front ends say so (usage error, exit 2).
   "$cncore" serve --no-state --grbl-tcp 127.0.0.1:2323 </dev/null >/dev/null 2>&1
   [ $? -eq 2 ] || fail "--grbl-tcp should be a usage error for now"
