@@ -13,7 +13,7 @@ DEB_PACKAGES := cmake ninja-build g++ make pkg-config \
 # a machine with Node.js from elsewhere has its own npm, which Debian's package conflicts with.
 NODE_PACKAGES := nodejs npm
 
-.PHONY: all deps configure build test demo bench format clean fuzz test-sanitize
+.PHONY: all deps configure build cncore test demo bench format clean fuzz test-sanitize
 
 all: build
 
@@ -35,10 +35,14 @@ configure: deps
 build: configure
 	@cmake --build --preset $(PRESET)
 
+# The `cncore` command alone (no tests, no benchmarks): all that `make demo` runs.
+cncore: configure
+	@cmake --build --preset $(PRESET) --target cncore
+
 test: build
 	@bash tools/run-tests.sh $(BUILD)
 
-demo: build
+demo: cncore
 	@mkdir -p out
 	$(CNCORE) run examples/seed-line-arc-line.ngc --summary out/demo-summary.json \
 	  --trajectory out/demo-trajectory.csv --report out/demo-report.html
