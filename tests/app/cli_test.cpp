@@ -612,7 +612,8 @@ TEST_F(Cli, TableFig2CancelModeFromTheMachineConfiguration) {
   EXPECT_NEAR(time_reaching(c, "x", 400), 4.0, 1e-9);
 
   write_file(dir_ / "rebase.toml",
-             "[tables]\ncancel_mode = \"rebase\"\n[axes.x]\nmin_mm = -50\nmax_mm = 450\n");
+             "[tables]\ncancel_mode = \"rebase\"\n[axes.x]\nmin_mm = -50\nmax_mm = 450\n"
+             "max_accel_mm_s2 = 150000\n");
   const Result rebase = run("table " + tables_example("fig2c-cancel.tbl") +
                             " --machine rebase.toml --trajectory rebase.csv --print-effective");
   ASSERT_EQ(rebase.code, 0) << rebase.err;
@@ -667,19 +668,19 @@ TEST_F(Cli, TableFig6MacroVariablesOverlapTheCornerAndEndEarlier) {
 
 TEST_F(Cli, TableParameterAndSignalAmounts) {
   write_file(dir_ / "p.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=P5\nL3000 X300\n");
-  const Result p = run("table p.tbl --param 5=-300 --trajectory p.csv");
+  const Result p = run("table p.tbl --param 5=-300 --trajectory p.csv" + kLathe);
   ASSERT_EQ(p.code, 0) << p.err;
   const auto pr = read_csv(dir_ / "p.csv");
   EXPECT_NEAR(time_reaching(pr, "x", 200), 1.7, 1e-9);
   EXPECT_NEAR(time_reaching(pr, "x", 300), 2.7, 1e-9);
 
   write_file(dir_ / "r.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=R1001\nL3000 X300\n");
-  const Result r = run("table r.tbl --signal R1001=-200 --trajectory r.csv");
+  const Result r = run("table r.tbl --signal R1001=-200 --trajectory r.csv" + kLathe);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NEAR(time_reaching(read_csv(dir_ / "r.csv"), "x", 200), 1.8, 1e-9);
   // The signal changes at 0.5 s, before the row is read at 1.0 s: the new value applies.
-  const Result at =
-      run("table r.tbl --signal R1001=-200 --signal-at 0.5:R1001=-400 --trajectory at.csv");
+  const Result at = run(
+      "table r.tbl --signal R1001=-200 --signal-at 0.5:R1001=-400 --trajectory at.csv" + kLathe);
   ASSERT_EQ(at.code, 0) << at.err;
   EXPECT_NEAR(time_reaching(read_csv(dir_ / "at.csv"), "x", 200), 1.6, 1e-9);
 
@@ -756,7 +757,8 @@ TEST_F(Cli, TableMasterAxisAndSignalChangeDuringTheRun) {
   // the error comes during the run, and still no output is left.
   write_file(dir_ / "late.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=R1\nL3000 X300\n");
   const Result late = run(
-      "table late.tbl --signal R1=0 --signal-at 0.5:R1=-1500 --trajectory t.csv --summary s.json");
+      "table late.tbl --signal R1=0 --signal-at 0.5:R1=-1500 --trajectory t.csv --summary s.json" +
+      kLathe);
   EXPECT_EQ(late.code, 1);
   EXPECT_NE(late.err.find("late.tbl:4:1: error:"), std::string::npos) << late.err;
   EXPECT_EQ(list_dir(dir_), (std::vector<std::string>{"ax.csv", "ax.tbl", "late.tbl"}));
@@ -771,7 +773,9 @@ TEST_F(Cli, TableOverTheAxisSpeedIsRefusedOrSlowedToFit) {
       << refused.err;
   EXPECT_FALSE(fs::exists(dir_ / "t.csv"));
 
-  write_file(dir_ / "slow.toml", "[tables]\nslow_to_fit = true\n");
+  // X stiff enough for the step of 1000 mm/s at the start: only the speed is slowed.
+  write_file(dir_ / "slow.toml",
+             "[tables]\nslow_to_fit = true\n[axes.x]\nmax_accel_mm_s2 = 1000000\n");
   const Result slowed =
       run("table fast.tbl --machine slow.toml --trajectory t.csv --summary s.json");
   ASSERT_EQ(slowed.code, 0) << slowed.err;
@@ -849,7 +853,7 @@ TEST_F(Cli, TableMasterAxisMovedByAPartProgramAndMCodesFire) {
 TEST_F(Cli, TableAmountsFromTheMachineConfigurationAndTheCommandLineOverridesThem) {
   write_file(dir_ / "m.toml",
              "[tables.parameters]\n5 = -300\n[tables.variables]\n501 = -200\n"
-             "[tables.signals]\n1001 = -400\n");
+             "[tables.signals]\n1001 = -400\n[axes.x]\nmax_accel_mm_s2 = 150000\n");
   write_file(dir_ / "all.tbl",
              "REF TIME\nAXES X\nL1000 X10\nL2000 X20 SFT=P5\nL3000 X30 SFT=#501\n"
              "L4000 X40 SFT=R1001\nL5000 X50\n");
