@@ -8,12 +8,12 @@ CNCORE := $(BUILD)/src/app/cncore
 DEB_PACKAGES := cmake ninja-build g++ make pkg-config python3 \
   libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev libfast-float-dev \
   libmuparser-dev libgtest-dev libgmock-dev libbenchmark-dev librapidcheck-dev libpng-dev time \
-  chromium
+  chromium dpkg-dev
 # Node.js and npm (uPlot for the HTML report) come from Debian only when no `npm` is on the PATH:
 # a machine with Node.js from elsewhere has its own npm, which Debian's package conflicts with.
 NODE_PACKAGES := nodejs npm
 
-.PHONY: all deps configure build test demo bench format clean fuzz test-sanitize
+.PHONY: all deps configure build cncore test demo install package bench format clean fuzz test-sanitize
 
 all: build
 
@@ -35,14 +35,32 @@ configure: deps
 build: configure
 	@cmake --build --preset $(PRESET)
 
+# The `cncore` command alone (no tests, no benchmarks): all that `make demo` runs.
+cncore: configure
+	@cmake --build --preset $(PRESET) --target cncore
+
 test: build
 	@bash tools/run-tests.sh $(BUILD)
 
-demo: build
+demo: cncore
 	@mkdir -p out
 	$(CNCORE) run examples/seed-line-arc-line.ngc --summary out/demo-summary.json \
 	  --trajectory out/demo-trajectory.csv --report out/demo-report.html
 	@echo "wrote out/demo-summary.json, out/demo-trajectory.csv and out/demo-report.html"
+
+# The command, its man page and bash/zsh completions, the docs and the examples, under PREFIX
+# (/usr/local by default: run as root, or give PREFIX=$$HOME/.local).
+PREFIX ?= /usr/local
+install: cncore
+	@cmake --build --preset $(PRESET) --target cncore_manual
+	cmake --install $(BUILD) --prefix $(PREFIX) --strip
+
+# The same as a Debian package: out/cncore_VERSION_amd64.deb (apt-get install ./out/cncore_*.deb).
+package: cncore
+	@cmake --build --preset $(PRESET) --target cncore_manual
+	@cpack -G DEB --config $(BUILD)/CPackConfig.cmake -B $(BUILD)/package >/dev/null
+	@mkdir -p out && cp $(BUILD)/package/cncore_*_amd64.deb out/
+	@ls out/cncore_*_amd64.deb
 
 bench: build
 	@bash bench/run.sh $(BUILD)

@@ -1,14 +1,14 @@
 #include "app/cli_common.hpp"
 
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
-#include <fstream>
 
 #include "core/error.hpp"
 
@@ -77,36 +77,20 @@ interp::Options interpreter_options(const std::vector<std::string>& vars,
 }
 
 MachineConfig machine_from(const std::string& path) {
+  if (!path.empty()) require_readable(path, "machine configuration");
   return machine_config_or_default(path);
 }
 
-void require_readable(const std::string& path) {
+void require_readable(const std::string& path, std::string_view what) {
+  const std::string subject = what.empty() ? "cannot open" : fmt::format("cannot open {}", what);
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) {
-    throw InputError(path, 0, 0, "cannot open: it is a directory");
+    throw InputError(path, 0, 0, subject + ": it is a directory");
   }
-  std::ifstream in(path);
-  if (!in) throw InputError(path, 0, 0, "cannot open");
-}
-
-ProgressObserver::ProgressObserver()
-    : enabled_(::isatty(STDERR_FILENO) == 1), start_(Clock::now()) {}
-
-void ProgressObserver::on_sample(const motion::Sample& s) {
-  if (!enabled_ || (++cycles_ & 4095) != 0) return;
-  const double wall_s = std::chrono::duration<double>(Clock::now() - start_).count();
-  if (wall_s < 1.0) return;
-  std::fprintf(stderr, "\rcncore: simulated %.1f s, line %u, %.0f cycles/s   ", s.t_s, s.line,
-               static_cast<double>(cycles_) / wall_s);
-  std::fflush(stderr);
-  shown_ = true;
-}
-
-void ProgressObserver::clear() {
-  if (!shown_) return;
-  std::fprintf(stderr, "\r%60s\r", "");
-  std::fflush(stderr);
-  shown_ = false;
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr)
+    throw InputError(path, 0, 0, fmt::format("{}: {}", subject, std::strerror(errno)));
+  std::fclose(f);
 }
 
 }  // namespace cncore::app

@@ -1,9 +1,7 @@
 // Shared pieces of the `cncore` commands (src/app only): the usage error (exit code 2), parsing
-// of command-line values, the machine configuration, and the progress display.
+// of command-line values, the machine configuration.
 #pragma once
 
-#include <chrono>
-#include <cstdint>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -41,27 +39,8 @@ interp::Options interpreter_options(const std::vector<std::string>& vars,
 // The configuration file, or the built-in machine for an empty path (InputError when bad).
 MachineConfig machine_from(const std::string& path);
 
-// InputError "cannot open" for a missing file or a directory (before anything is written).
-void require_readable(const std::string& path);
-
-// A one-line progress display on stderr (spec 05): only when stderr is a terminal, and only once
-// the run has taken more than a second. Checks the clock every 4096 cycles.
-class ProgressObserver : public sim::SampleObserver {
- public:
-  ProgressObserver();
-  ~ProgressObserver() override { clear(); }
-  void on_sample(const motion::Sample& s) override;
-  void on_finish() override { clear(); }
-  // False when stderr is not a terminal: then it shows nothing and need not be called at all.
-  bool enabled() const { return enabled_; }
-
- private:
-  using Clock = std::chrono::steady_clock;
-  void clear();
-  bool enabled_;
-  bool shown_ = false;
-  std::uint64_t cycles_ = 0;
-  Clock::time_point start_;
-};
+// InputError "cannot open [WHAT]: REASON" (strerror, or "it is a directory") for a file that
+// cannot be read, before anything is written.
+void require_readable(const std::string& path, std::string_view what = {});
 
 }  // namespace cncore::app

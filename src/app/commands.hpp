@@ -22,6 +22,7 @@ struct RunArgs {
   std::string heightmap, heightmap_grid;      // cutting simulation: --heightmap, --heightmap-grid
   std::optional<double> dry_run_feed_mm_min;  // --dry-run FEED
   std::optional<double> single_block_wait_s;  // --single-block WAIT_S
+  std::string progress = "auto";              // --progress auto|on|off|json
 };
 
 int command_run(const RunArgs& a);
@@ -41,8 +42,9 @@ struct TableArgs {
   std::optional<double> spindle_rpm, master_speed_mm_min;
   std::uint32_t repeat = 1;
   std::vector<std::string> vars, params, signals, signals_at;
-  std::string master_program;  // REF AXIS: a part program moves the master axis
-  std::string report;          // --report FILE.html
+  std::string master_program;     // REF AXIS: a part program moves the master axis
+  std::string report;             // --report FILE.html
+  std::string progress = "auto";  // --progress auto|on|off|json
 };
 
 int command_table(const TableArgs& a);

@@ -2,20 +2,83 @@
 // file defines the command line; each command is in its own file (commands.hpp).
 // Exit codes: 0 success, 1 the program or another input is wrong (FILE:LINE:COL: error: ...),
 // 2 wrong usage (including bad command-line values), 3 internal failure.
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <exception>
 #include <iostream>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "app/cli_common.hpp"
 #include "app/commands.hpp"
+#include "app/suggest.hpp"
 #include "core/error.hpp"
 
 namespace {
 
 using namespace cncore;
 using namespace cncore::app;
+
+// After a failed parse: a misspelled command or long option, named with the closest known one
+// ("did you mean …?"), or nothing when the error is of another kind.
+std::optional<std::string> misspelling(const CLI::App& app, int argc, char** argv) {
+  if (argc < 2 || argv[1][0] == '-') return std::nullopt;
+  const std::string command = argv[1];
+  std::vector<std::string> commands;
+  const CLI::App* sub = nullptr;
+  for (const CLI::App* s : app.get_subcommands([](const CLI::App*) { return true; })) {
+    commands.push_back(s->get_name());
+    if (s->get_name() == command) sub = s;
+  }
+  if (sub == nullptr) {
+    const auto near = closest_name(command, commands);
+    return fmt::format("unknown command '{}'{} (commands: {})", command,
+                       near ? fmt::format("; did you mean '{}'?", *near) : "",
+                       fmt::join(commands, ", "));
+  }
+  std::vector<std::string> options;
+  for (const CLI::Option* o : sub->get_options()) {
+    for (const std::string& name : o->get_lnames()) options.push_back("--" + name);
+  }
+  for (int i = 2; i < argc; ++i) {
+    std::string arg = argv[i];
+    if (arg == "--") break;
+    if (arg.rfind("--", 0) != 0) continue;
+    arg = arg.substr(0, arg.find('='));
+    if (std::find(options.begin(), options.end(), arg) != options.end()) continue;
+    const auto near = closest_name(arg, options);
+    return fmt::format("{}: unknown option {}{}", command, arg,
+                       near ? fmt::format("; did you mean {}?", *near) : "");
+  }
+  return std::nullopt;
+}
+
+void add_progress_option(CLI::App& command, std::string& mode) {
+  command
+      .add_option(
+          "--progress", mode,
+          "Progress on stderr: share of the program run (lines), simulated time, speed against "
+          "real time, time left; json: one JSON object per line (auto: on when stderr is "
+          "a terminal; --progress alone: on)")
+      ->check(CLI::IsMember({"auto", "on", "off", "json"}))
+      ->type_name("auto|on|off|json");
+}
+
+// `--progress` alone means `--progress=on`: rewritten before parsing, so that it never takes the
+// program's name as its value.
+std::vector<std::string> with_bare_progress_on(int argc, char** argv) {
+  std::vector<std::string> args;
+  for (int i = argc - 1; i > 0; --i) {  // CLI11 parses a vector given in reverse order
+    const std::string a = argv[i];
+    args.push_back(a == "--progress" ? "--progress=on" : a);
+  }
+  return args;
+}
 
 int main_cli(int argc, char** argv) {
   CLI::App app{
@@ -83,6 +146,7 @@ int main_cli(int argc, char** argv) {
                   "Single-block stop: stop at the end of every motion block and wait this long "
                   "before the next (the operator's cycle start; 0: at once), s")
       ->type_name("WAIT_S");
+  add_progress_option(*run, ra.progress);
   run->add_option("--var", ra.vars, "Named parameter #<NAME> = VALUE (NAME=VALUE, repeatable)")
       ->allow_extra_args(false)
       ->type_name("NAME=V");
@@ -148,6 +212,7 @@ int main_cli(int argc, char** argv) {
       ->add_option("--master-program", ta.master_program,
                    "REF AXIS: a part program moves the master axis (its other axes too)")
       ->type_name("FILE.ngc");
+  add_progress_option(*table, ta.progress);
   table->add_option("--repeat", ta.repeat, "Repetitions of a CYCLIC table without a count")
       ->check(CLI::Range(1U, 1000000000U))
       ->type_name("N");
@@ -194,8 +259,15 @@ int main_cli(int argc, char** argv) {
   latency->add_option("--machine", la.machine, "Machine configuration")->type_name("FILE.toml");
 
   try {
-    app.parse(argc, argv);
+    std::vector<std::string> args = with_bare_progress_on(argc, argv);
+    app.parse(args);
   } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() != 0) {
+      if (const auto message = misspelling(app, argc, argv)) {
+        std::cerr << "cncore: error: " << *message << "\nRun with --help for more information.\n";
+        return 2;
+      }
+    }
     return app.exit(e) == 0 ? 0 : 2;
   }
   if (*run) return command_run(ra);

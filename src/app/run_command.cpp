@@ -11,6 +11,7 @@
 
 #include "app/cli_common.hpp"
 #include "app/commands.hpp"
+#include "app/progress.hpp"
 #include "config/machine_config.hpp"
 #include "core/error.hpp"
 #include "feedcontrol/adaptive_run.hpp"
@@ -123,6 +124,8 @@ int command_run(const RunArgs& a) {
     options.operator_modes.single_block_wait_s = *a.single_block_wait_s;
   }
   require_readable(a.program);
+  const ProgressMode progress_shown = progress_mode(a.progress);
+  if (!a.load_csv.empty()) require_readable(a.load_csv, "load file");
 
   // Adaptive feed control (spec 04): runs in the loop when there is a load source.
   const feed::SelectedLoadSource load = feed::make_load_source(machine, {a.load_csv});
@@ -201,7 +204,7 @@ int command_run(const RunArgs& a) {
                      : options.kernel.accdec == motion::AccDecType::kSearch ? "search"
                                                                             : "acceleration");
   summary.set_operator_modes(options.operator_modes);
-  ProgressObserver progress;
+  ProgressObserver progress(progress_shown, a.program);
   std::vector<sim::SampleObserver*> observers{&summary};
   if (progress.enabled()) observers.push_back(&progress);  // else one virtual call per cycle less
   if (csv) observers.push_back(&*csv);

@@ -14,6 +14,7 @@
 
 #include "app/cli_common.hpp"
 #include "app/commands.hpp"
+#include "app/progress.hpp"
 #include "config/machine_config.hpp"
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
@@ -124,6 +125,7 @@ std::string format_table_summary(const io::Summary& s, const tables::RunSummary&
 
 int command_table(const TableArgs& a) {
   const MachineConfig machine = machine_from(a.machine);
+  const ProgressMode progress_shown = progress_mode(a.progress);
   tables::RunOptions options;
   options.settings.cancel_mode = machine.table_cancel_mode == TableCancelMode::kRebase
                                      ? tables::CancelMode::kRebase
@@ -160,7 +162,7 @@ int command_table(const TableArgs& a) {
 
   std::vector<tables::Table> tabs;
   for (const std::string& path : a.tables) {
-    require_readable(path);
+    require_readable(path, "table file");
     tabs.push_back(tables::load_table(path));
   }
   // A part program moving the master axis, stepped once per cycle by the table run (which
@@ -223,8 +225,9 @@ int command_table(const TableArgs& a) {
 
   io::SummaryObserver summary(machine, "table");
   summary.set_record_sample_events(false);  // every M code of a cycle, added below
-  ProgressObserver progress;
-  std::vector<sim::SampleObserver*> observers{&summary, &progress};
+  ProgressObserver progress(progress_shown, "");
+  std::vector<sim::SampleObserver*> observers{&summary};
+  if (progress.enabled()) observers.push_back(&progress);
   if (csv) observers.push_back(&*csv);
   if (report) observers.push_back(&*report);
   const tables::RunSummary result = tables::run_tables(plan, [&](const tables::TableSample& ts) {

@@ -17,6 +17,12 @@ std::string Diagnostic::formatted() const {
                      severity == Severity::kError ? "error" : "warning", message);
 }
 
+std::size_t post_filter_cycles(const MachineConfig& machine) {
+  if (!(machine.period_s > 0)) return 1;
+  return std::max<std::size_t>(
+      1, static_cast<std::size_t>(std::llround(machine.post_filter_s / machine.period_s)));
+}
+
 bool TablePlan::has_errors() const {
   return std::any_of(diagnostics.begin(), diagnostics.end(), [](const Diagnostic& d) {
     return d.severity == Diagnostic::Severity::kError;
@@ -68,6 +74,46 @@ struct LimitCheck {
     };
     return fmt::format("between {} and {} (reference {:.6g} to {:.6g})", line_of(i), line_of(i + 1),
                        pts[i].ref, pts[i + 1].ref);
+  }
+
+  // The seed's linear distribution changes the velocity in one step at a control point. The
+  // post-interpolation moving average over N = post_filter_cycles cycles (run_tables applies it)
+  // turns the step into a ramp over N·τ: a = |Δv| / (N·τ). Slowing the reference by k divides
+  // Δv, so a by k (not k²). Listed for the first few rows of each axis, then counted.
+  template <typename Slope>
+  void check_velocity_steps(const Table& t, std::size_t ti, const std::vector<EffectivePoint>& pts,
+                            std::size_t axis, const Slope& slope) {
+    constexpr int kListed = 5;
+    const AxisConfig& ac = m.axes[axis];
+    const char letter = kAxisLetters[axis];
+    const char* unit = unit_of(m, axis);
+    const std::size_t n = pts.size();
+    const double step_s = static_cast<double>(post_filter_cycles(m)) * m.period_s;
+    int listed = 0, more = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double v_in = i == 0 ? 0 : slope(i - 1);
+      const double v_out = i + 1 == n ? 0 : slope(i);
+      const double dv_s = std::abs(v_out - v_in) * rate;
+      const double a = dv_s / step_s;
+      if (a <= ac.max_accel_mm_s2 * (1 + 1e-9)) continue;
+      max_ratio = std::max(max_ratio, a / ac.max_accel_mm_s2);
+      const bool quiet = listed >= kListed;
+      const bool fresh = report(
+          t, pts, i, ti, axis, 3, Diagnostic::Severity::kError,
+          fmt::format("{} velocity steps by {:.6g} {}/s at this control point (LINEAR): {:.6g} "
+                      "{}/s² over {:.6g} ms exceeds the axis limit {:.6g} {}/s² (fits with CUBIC, "
+                      "[motion] post_filter_s >= {:.3g} s, or slow_to_fit)",
+                      letter, dv_s, unit, a, unit, step_s * 1000, ac.max_accel_mm_s2, unit,
+                      std::ceil(dv_s / ac.max_accel_mm_s2 / m.period_s) * m.period_s),
+          quiet);
+      if (fresh) (quiet ? more : listed) += 1;
+    }
+    if (more > 0) {
+      out.push_back({Diagnostic::Severity::kError, t.file, t.ref_line, t.ref_col,
+                     fmt::format("{} velocity steps beyond the axis acceleration limit at {} "
+                                 "more control points of this table (not listed)",
+                                 letter, more)});
+    }
   }
 
   void check(const Table& t, std::size_t ti, const std::vector<EffectivePoint>& pts) {
@@ -123,38 +169,7 @@ struct LimitCheck {
                              letter, a_mm_s2, unit, seg_text(t, pts, i), ac.max_accel_mm_s2, unit));
         }
       }
-      if (t.interp == Interp::kLinear) {
-        // The seed's linear distribution changes the velocity in one step at a control point;
-        // with no post-interpolation filter that step happens within one period.
-        // Listed for the first few rows of each axis, then counted (a long linear table would
-        // otherwise bury the errors under one warning per row).
-        constexpr int kListed = 5;
-        int listed = 0, more = 0;
-        double step_s = std::max(m.post_filter_s, m.period_s);
-        for (std::size_t i = 0; i < n; ++i) {
-          double v_in = i == 0 ? 0 : slope(i - 1);
-          double v_out = i + 1 == n ? 0 : slope(i);
-          double dv_s = std::abs(v_out - v_in) * rate;
-          double a = dv_s / step_s;
-          if (a > ac.max_accel_mm_s2 * (1 + 1e-9)) {
-            bool quiet = listed >= kListed;
-            bool fresh = report(
-                t, pts, i, ti, axis, 3, Diagnostic::Severity::kWarning,
-                fmt::format("{} velocity steps by {:.6g} {}/s at this control point (LINEAR): "
-                            "{:.6g} {}/s² over {:.6g} ms exceeds the axis limit {:.6g} {}/s² "
-                            "(CUBIC keeps the velocity continuous)",
-                            letter, dv_s, unit, a, unit, step_s * 1000, ac.max_accel_mm_s2, unit),
-                quiet);
-            if (fresh) (quiet ? more : listed) += 1;
-          }
-        }
-        if (more > 0) {
-          out.push_back({Diagnostic::Severity::kWarning, t.file, t.ref_line, t.ref_col,
-                         fmt::format("{} velocity steps beyond the axis acceleration limit at {} "
-                                     "more control points of this table (not listed)",
-                                     letter, more)});
-        }
-      }
+      if (t.interp == Interp::kLinear) check_velocity_steps(t, ti, pts, axis, slope);
     }
   }
 };

@@ -1,8 +1,10 @@
 // The reader (the seed's reading section 10): table text → header + rows. It only checks the
 // syntax; reference values, shifts and the machine are checked by the analysis (plan_tables).
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -323,7 +325,9 @@ Table parse_table(std::string_view text, const std::string& file) {
 
 Table load_table(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, 0, 0, "cannot open the table file");
+  if (!in)
+    throw InputError(path, 0, 0,
+                     std::string("cannot open the table file: ") + std::strerror(errno));
   std::ostringstream ss;
   ss << in.rdbuf();
   return parse_table(ss.str(), path);

@@ -185,30 +185,54 @@ RunSummary run_tables(const TablePlan& plan,
     cursors.back().start(static_cast<std::uint8_t>(i), s.m_codes);
   }
 
+  // The post-interpolation moving average ([motion] post_filter_s) over the last n_filter raw
+  // positions of every axis but the master (the reference is not filtered): a velocity step
+  // becomes a ramp over n_filter cycles. After the tables end it runs n_filter − 1 more cycles so
+  // that the axes settle on the end point. Ring allocated here, before the first cycle.
+  const std::size_t n_filter = post_filter_cycles(plan.machine);
+  std::vector<AxisVec> ring(n_filter, plan.start_position);
+  std::size_t ring_head = 0, settle_cycles = 0;
+  bool tables_done = false;
+  AxisVec raw = plan.start_position;
   AxisVec prev = plan.start_position;
   for (std::uint64_t k = 0;; ++k) {
     const double t_s = static_cast<double>(k) * period_s;
-    if (k > 0) {
-      s.m_codes.clear();
-      // Forward-only reference: a master moving back holds the table where it is.
-      if (src.position) {
-        master_pos = src.position(t_s);  // once per cycle: the function may step a simulation
-        ref = std::max(ref, master_pos);
-      } else {
-        ref = start_ref + static_cast<double>(k) * ref_per_cycle;
-        master_pos = ref;
+    if (k > 0) s.m_codes.clear();
+    if (!tables_done) {
+      if (k > 0) {
+        // Forward-only reference: a master moving back holds the table where it is.
+        if (src.position) {
+          master_pos = src.position(t_s);  // once per cycle: the function may step a simulation
+          ref = std::max(ref, master_pos);
+        } else {
+          ref = start_ref + static_cast<double>(k) * ref_per_cycle;
+          master_pos = ref;
+        }
       }
+      raw = plan.start_position;
+      if (master) raw[master_axis] = master_pos;
+      tables_done = true;
+      for (std::size_t i = 0; i < cursors.size(); ++i) {
+        cursors[i].advance(ref, t_s, s.m_codes);
+        cursors[i].evaluate(ref, raw);
+        s.lines[i] = cursors[i].active_line();
+        tables_done = tables_done && cursors[i].done();
+      }
+    } else {
+      ++settle_cycles;
     }
     s.t_s = t_s;
     s.ref = ref;
-    s.position = plan.start_position;
-    if (master) s.position[master_axis] = master_pos;
-    bool all_done = true;
-    for (std::size_t i = 0; i < cursors.size(); ++i) {
-      cursors[i].advance(ref, t_s, s.m_codes);
-      cursors[i].evaluate(ref, s.position);
-      s.lines[i] = cursors[i].active_line();
-      all_done = all_done && cursors[i].done();
+    s.position = raw;
+    if (n_filter > 1) {
+      ring[ring_head] = raw;
+      ring_head = (ring_head + 1) % n_filter;
+      for (std::size_t a = 0; a < kMaxAxes; ++a) {
+        if (master && a == master_axis) continue;
+        double total = 0;
+        for (const AxisVec& p : ring) total += p[a];
+        s.position[a] = total / static_cast<double>(n_filter);
+      }
     }
     s.line = s.lines[0];
     // Path speed of the linear axes over the last cycle (|Δxyz| / τ, mm/min).
@@ -219,7 +243,7 @@ RunSummary run_tables(const TablePlan& plan,
     ++sum.cycles;
     sum.duration_s = t_s;
     sum.end_ref = ref;
-    if (all_done) break;
+    if (tables_done && settle_cycles + 1 >= n_filter) break;
     // A clock or constant-rate source always reaches the end; a position function may stall.
     if (src.position && t_s >= plan.options.max_time_s) {
       sum.finished = false;

@@ -205,6 +205,11 @@ struct TablePlan {
 TablePlan plan_tables(std::vector<Table> tables, const MachineConfig& machine,
                       const RunOptions& options);
 
+// Cycles of the post-interpolation moving average that run_tables applies to the table axes
+// ([motion] post_filter_s, the seed's acc/dec after interpolation): round(post_filter_s / τ),
+// at least 1 (1: no filter).
+std::size_t post_filter_cycles(const MachineConfig& machine);
+
 // The effective (shifted) tables as table text that reads back as the same motion.
 std::string format_effective(const TablePlan& plan);
 

@@ -29,6 +29,11 @@ struct Result {
 using cncore::testing::slurp;
 using cncore::testing::write_file;
 
+// The i-th of a back-and-forth of 10 mm moves along X.
+std::string fmt_move(int i) {
+  return i % 2 == 0 ? "G1 X10 F1000\n" : "G1 X0 F1000\n";
+}
+
 std::vector<std::string> list_dir(const fs::path& dir) {
   std::vector<std::string> names;
   for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
@@ -180,7 +185,7 @@ TEST_F(Cli, BadConfigIsExitOneWithFileLineColumnAndKey) {
 TEST_F(Cli, MissingProgramIsExitOneCannotOpen) {
   const Result r = run("run nofile.ngc --trajectory t.csv --summary s.json");
   EXPECT_EQ(r.code, 1) << r.err;
-  EXPECT_EQ(r.err, "nofile.ngc:0:0: error: cannot open\n");
+  EXPECT_EQ(r.err, "nofile.ngc:0:0: error: cannot open: No such file or directory\n");
   fs::create_directory(dir_ / "adir");
   const Result d = run("run adir");
   EXPECT_EQ(d.code, 1);
@@ -193,8 +198,128 @@ TEST_F(Cli, MissingProgramIsExitOneCannotOpen) {
   fs::remove(dir_ / "p.ngc");
   const Result c = run("check nofile.ngc");
   EXPECT_EQ(c.code, 1);
-  EXPECT_EQ(c.err, "nofile.ngc:0:0: error: cannot open\n");
+  EXPECT_EQ(c.err, "nofile.ngc:0:0: error: cannot open: No such file or directory\n");
   EXPECT_TRUE(list_dir(dir_).empty());
+}
+
+TEST_F(Cli, CannotOpenSaysWhy) {
+  write_file(dir_ / "p.ngc", "G1 X1 F100\nM30\n");
+  write_file(dir_ / "locked.ngc", "G1 X1 F100\nM30\n");
+  fs::permissions(dir_ / "locked.ngc", fs::perms::none);
+  const bool root_reads_anything = std::ifstream(dir_ / "locked.ngc").good();
+  if (!root_reads_anything) {
+    const Result l = run("run locked.ngc");
+    EXPECT_EQ(l.code, 1);
+    EXPECT_EQ(l.err, "locked.ngc:0:0: error: cannot open: Permission denied\n");
+  }
+  fs::permissions(dir_ / "locked.ngc", fs::perms::owner_all);
+  const Result m = run("run p.ngc --machine nope.toml");
+  EXPECT_EQ(m.code, 1);
+  EXPECT_EQ(m.err,
+            "nope.toml:0:0: error: cannot open machine configuration: No such file or directory\n");
+  const Result t = run("table nope.tbl");
+  EXPECT_EQ(t.code, 1);
+  EXPECT_EQ(t.err, "nope.tbl:0:0: error: cannot open table file: No such file or directory\n");
+  const Result l = run("run p.ngc --load nope.csv");
+  EXPECT_EQ(l.code, 1);
+  EXPECT_EQ(l.err, "nope.csv:0:0: error: cannot open load file: No such file or directory\n");
+}
+
+// A program of `moves` 10 mm feed moves at F1000: 0.6 s simulated each.
+std::string long_program(int moves) {
+  std::string p = "G21 G90 G17\n";
+  for (int i = 0; i < moves; ++i) p += fmt_move(i);
+  return p + "M30\n";
+}
+
+TEST_F(Cli, ProgressJsonIsOneObjectPerLineEndingDone) {
+  write_file(dir_ / "p.ngc", long_program(200));  // 120 s simulated: many 4096-cycle checks
+  const Result r = run("run p.ngc --progress=json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::istringstream lines(r.err);
+  std::string line;
+  std::vector<nlohmann::json> updates;
+  while (std::getline(lines, line)) updates.push_back(nlohmann::json::parse(line));
+  ASSERT_GE(updates.size(), 2U) << r.err;
+  double last_pct = 0, last_sim = -1;
+  for (const auto& u : updates) {
+    EXPECT_EQ(u.at("lines").get<int>(), 202) << u;  // the program's lines, M30 included
+    EXPECT_GE(u.at("percent").get<double>(), last_pct) << u;
+    EXPECT_GT(u.at("simulated_s").get<double>(), last_sim) << u;
+    EXPECT_GE(u.at("wall_s").get<double>(), 0) << u;
+    last_pct = u.at("percent").get<double>();
+    last_sim = u.at("simulated_s").get<double>();
+  }
+  const auto& done = updates.back();
+  EXPECT_TRUE(done.at("done").get<bool>());
+  EXPECT_DOUBLE_EQ(done.at("percent").get<double>(), 100.0);
+  EXPECT_DOUBLE_EQ(done.at("left_s").get<double>(), 0.0);
+  // The simulated time of the last update is the cycle time the summary prints.
+  const std::size_t at = r.out.find("cycle time");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  EXPECT_NEAR(done.at("simulated_s").get<double>(), std::stod(r.out.substr(at + 14)), 0.001);
+  for (std::size_t i = 0; i + 1 < updates.size(); ++i) EXPECT_FALSE(updates[i].at("done"));
+}
+
+TEST_F(Cli, ProgressIsOffWhenPipedUnlessAskedFor) {
+  write_file(dir_ / "p.ngc", long_program(20));
+  for (const char* args : {"run p.ngc", "run p.ngc --progress=off", "run p.ngc --progress=auto",
+                           "run --progress=off p.ngc"}) {
+    const Result r = run(args);
+    EXPECT_EQ(r.code, 0) << args << "\n" << r.err;
+    EXPECT_EQ(r.err, "") << args;
+  }
+  // --progress alone is --progress=on and never takes the program's name as its value.
+  const Result bare = run("run --progress p.ngc");
+  EXPECT_EQ(bare.code, 0) << bare.err;
+  EXPECT_NE(bare.out.find("cycle time"), std::string::npos);
+  const Result bad = run("run p.ngc --progress=sometimes");
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("--progress"), std::string::npos) << bad.err;
+  // Tables: no program lines, so no percentage; the last update ends the stream.
+  write_file(dir_ / "t.tbl", "REF TIME\nAXES X\nCUBIC\nL1000 X10\nL2000 X0\n");
+  const Result t = run("table t.tbl --progress=json");
+  ASSERT_EQ(t.code, 0) << t.err;
+  const auto last = nlohmann::json::parse(t.err.substr(t.err.rfind('{')));
+  EXPECT_TRUE(last.at("done").get<bool>());
+  EXPECT_FALSE(last.contains("percent")) << last;
+  EXPECT_NEAR(last.at("simulated_s").get<double>(), 2.0, 0.002);
+}
+
+TEST_F(Cli, MisspelledCommandsAndOptionsGetASuggestion) {
+  write_file(dir_ / "p.ngc", "G1 X1 F100\nM30\n");
+  const Result c = run("runn p.ngc");
+  EXPECT_EQ(c.code, 2);
+  EXPECT_EQ(
+      c.err.rfind("cncore: error: unknown command 'runn'; did you mean 'run'? (commands: run, "
+                  "check, table, machine)\n",
+                  0),
+      0u)
+      << c.err;
+  EXPECT_NE(run("chekc p.ngc").err.find("did you mean 'check'?"), std::string::npos);
+  EXPECT_NE(run("tabel x.tbl").err.find("did you mean 'table'?"), std::string::npos);
+  // Nothing close: no guess, the list of commands.
+  const Result f = run("frobnicate");
+  EXPECT_EQ(f.code, 2);
+  EXPECT_EQ(f.err.find("did you mean"), std::string::npos) << f.err;
+  EXPECT_NE(f.err.find("unknown command 'frobnicate' (commands: run,"), std::string::npos) << f.err;
+  for (const char* args : {"run p.ngc --overide 50", "run --overide=50 p.ngc"}) {
+    const Result o = run(args);
+    EXPECT_EQ(o.code, 2) << args;
+    EXPECT_EQ(
+        o.err.rfind("cncore: error: run: unknown option --overide; did you mean --override?", 0),
+        0u)
+        << o.err;
+  }
+  EXPECT_NE(run("run p.ngc --trajectroy t.csv").err.find("did you mean --trajectory?"),
+            std::string::npos);
+  EXPECT_NE(run("check p.ngc --block").err.find("did you mean --blocks?"), std::string::npos);
+  EXPECT_NE(run("table x.tbl --spindle-rmp 100").err.find("did you mean --spindle-rpm?"),
+            std::string::npos);
+  const Result n = run("run p.ngc --no-such-option");
+  EXPECT_EQ(n.code, 2);
+  EXPECT_NE(n.err.find("unknown option --no-such-option\n"), std::string::npos) << n.err;
+  EXPECT_EQ(list_dir(dir_), std::vector<std::string>{"p.ngc"});
 }
 
 TEST_F(Cli, BadProgramIsExitOneWithFileLineColumn) {
@@ -487,7 +612,8 @@ TEST_F(Cli, TableFig2CancelModeFromTheMachineConfiguration) {
   EXPECT_NEAR(time_reaching(c, "x", 400), 4.0, 1e-9);
 
   write_file(dir_ / "rebase.toml",
-             "[tables]\ncancel_mode = \"rebase\"\n[axes.x]\nmin_mm = -50\nmax_mm = 450\n");
+             "[tables]\ncancel_mode = \"rebase\"\n[axes.x]\nmin_mm = -50\nmax_mm = 450\n"
+             "max_accel_mm_s2 = 150000\n");
   const Result rebase = run("table " + tables_example("fig2c-cancel.tbl") +
                             " --machine rebase.toml --trajectory rebase.csv --print-effective");
   ASSERT_EQ(rebase.code, 0) << rebase.err;
@@ -542,19 +668,19 @@ TEST_F(Cli, TableFig6MacroVariablesOverlapTheCornerAndEndEarlier) {
 
 TEST_F(Cli, TableParameterAndSignalAmounts) {
   write_file(dir_ / "p.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=P5\nL3000 X300\n");
-  const Result p = run("table p.tbl --param 5=-300 --trajectory p.csv");
+  const Result p = run("table p.tbl --param 5=-300 --trajectory p.csv" + kLathe);
   ASSERT_EQ(p.code, 0) << p.err;
   const auto pr = read_csv(dir_ / "p.csv");
   EXPECT_NEAR(time_reaching(pr, "x", 200), 1.7, 1e-9);
   EXPECT_NEAR(time_reaching(pr, "x", 300), 2.7, 1e-9);
 
   write_file(dir_ / "r.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=R1001\nL3000 X300\n");
-  const Result r = run("table r.tbl --signal R1001=-200 --trajectory r.csv");
+  const Result r = run("table r.tbl --signal R1001=-200 --trajectory r.csv" + kLathe);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NEAR(time_reaching(read_csv(dir_ / "r.csv"), "x", 200), 1.8, 1e-9);
   // The signal changes at 0.5 s, before the row is read at 1.0 s: the new value applies.
-  const Result at =
-      run("table r.tbl --signal R1001=-200 --signal-at 0.5:R1001=-400 --trajectory at.csv");
+  const Result at = run(
+      "table r.tbl --signal R1001=-200 --signal-at 0.5:R1001=-400 --trajectory at.csv" + kLathe);
   ASSERT_EQ(at.code, 0) << at.err;
   EXPECT_NEAR(time_reaching(read_csv(dir_ / "at.csv"), "x", 200), 1.6, 1e-9);
 
@@ -631,7 +757,8 @@ TEST_F(Cli, TableMasterAxisAndSignalChangeDuringTheRun) {
   // the error comes during the run, and still no output is left.
   write_file(dir_ / "late.tbl", "REF TIME\nAXES X\nL1000 X100\nL2000 X200 SFT=R1\nL3000 X300\n");
   const Result late = run(
-      "table late.tbl --signal R1=0 --signal-at 0.5:R1=-1500 --trajectory t.csv --summary s.json");
+      "table late.tbl --signal R1=0 --signal-at 0.5:R1=-1500 --trajectory t.csv --summary s.json" +
+      kLathe);
   EXPECT_EQ(late.code, 1);
   EXPECT_NE(late.err.find("late.tbl:4:1: error:"), std::string::npos) << late.err;
   EXPECT_EQ(list_dir(dir_), (std::vector<std::string>{"ax.csv", "ax.tbl", "late.tbl"}));
@@ -646,7 +773,9 @@ TEST_F(Cli, TableOverTheAxisSpeedIsRefusedOrSlowedToFit) {
       << refused.err;
   EXPECT_FALSE(fs::exists(dir_ / "t.csv"));
 
-  write_file(dir_ / "slow.toml", "[tables]\nslow_to_fit = true\n");
+  // X stiff enough for the step of 1000 mm/s at the start: only the speed is slowed.
+  write_file(dir_ / "slow.toml",
+             "[tables]\nslow_to_fit = true\n[axes.x]\nmax_accel_mm_s2 = 1000000\n");
   const Result slowed =
       run("table fast.tbl --machine slow.toml --trajectory t.csv --summary s.json");
   ASSERT_EQ(slowed.code, 0) << slowed.err;
@@ -724,7 +853,7 @@ TEST_F(Cli, TableMasterAxisMovedByAPartProgramAndMCodesFire) {
 TEST_F(Cli, TableAmountsFromTheMachineConfigurationAndTheCommandLineOverridesThem) {
   write_file(dir_ / "m.toml",
              "[tables.parameters]\n5 = -300\n[tables.variables]\n501 = -200\n"
-             "[tables.signals]\n1001 = -400\n");
+             "[tables.signals]\n1001 = -400\n[axes.x]\nmax_accel_mm_s2 = 150000\n");
   write_file(dir_ / "all.tbl",
              "REF TIME\nAXES X\nL1000 X10\nL2000 X20 SFT=P5\nL3000 X30 SFT=#501\n"
              "L4000 X40 SFT=R1001\nL5000 X50\n");

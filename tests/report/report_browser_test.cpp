@@ -153,6 +153,7 @@ TEST_F(ReportBrowser, TableReportChartsRenderWithoutErrors) {
   const std::string tables = std::string(CNCORE_SOURCE_DIR) + "/examples/tables/";
   const std::string run = quote(CNCORE_BIN) + " table " + quote(tables + "fig6-x.tbl") + " " +
                           quote(tables + "fig6-z.tbl") +
+                          " --machine " + quote(tables + "lathe.toml") +
                           " --var 501=0 --var 502=0 --var 503=0 --report " + quote(html.string()) +
                           " > /dev/null 2>&1";
   ASSERT_EQ(shell(run), 0) << run;

@@ -195,9 +195,13 @@ TEST(TableReportCli, ReportOfATableRunMatchesItsSummary) {
                  out = dir / "stdout.txt";
   // X 0 → 100 mm between 1000 and 2000 ms: 100 mm/s = 6000 mm/min; M11 at 1 s, M12 at 2 s.
   write_file(tbl, "REF TIME\nAXES X\nL0 X0\nL1000 X0 M11\nL2000 X100 M12\n");
-  const std::string cmd = quote(CNCORE_BIN) + " table " + quote(tbl.string()) + " --report " +
-                          quote(html.string()) + " --summary " + quote(json.string()) + " > " +
-                          quote(out.string()) + " 2>&1";
+  // X stiff enough for the linear distribution's velocity steps of 100 mm/s within 1 ms.
+  const fs::path machine = dir / "stiff.toml";
+  write_file(machine, "[axes.x]\nmax_accel_mm_s2 = 150000\n");
+  const std::string cmd = quote(CNCORE_BIN) + " table " + quote(tbl.string()) + " --machine " +
+                          quote(machine.string()) + " --report " + quote(html.string()) +
+                          " --summary " + quote(json.string()) + " > " + quote(out.string()) +
+                          " 2>&1";
   ASSERT_EQ(shell(cmd), 0) << cmd << "\n" << slurp(out);
   EXPECT_NE(slurp(out).find("report        " + html.string()), std::string::npos) << slurp(out);
   const std::string page = slurp(html);
@@ -215,9 +219,10 @@ TEST(TableReportCli, ReportOfATableRunMatchesItsSummary) {
 
   // An unwritable report path fails before the run and leaves nothing.
   const fs::path bad = dir / "missing-dir" / "r.html";
-  EXPECT_EQ(shell(quote(CNCORE_BIN) + " table " + quote(tbl.string()) + " --report " +
-                  quote(bad.string()) + " > /dev/null 2>&1"),
-            1);
+  EXPECT_EQ(
+      shell(quote(CNCORE_BIN) + " table " + quote(tbl.string()) + " --machine " +
+            quote(machine.string()) + " --report " + quote(bad.string()) + " > /dev/null 2>&1"),
+      1);
   EXPECT_FALSE(fs::exists(bad));
 }
 

@@ -14,7 +14,7 @@ struct Where {
 
 // Parses, plans and runs; expects an InputError at `w`.
 void expect_error(const std::vector<std::string>& texts, const Where& w, RunOptions o = {},
-                  const MachineConfig& m = test_machine()) {
+                  const MachineConfig& m = stiff_machine()) {
   try {
     run_texts(texts, o, m);
     ADD_FAILURE() << "no error for: " << texts.back();
@@ -76,7 +76,7 @@ TEST(BadInput, UndefinedParameterVariableSignal) {
 }
 
 TEST(BadInput, AxisNotConfigured) {
-  MachineConfig m = test_machine();
+  MachineConfig m = stiff_machine();
   m.axes[kZ].enabled = false;
   expect_error({"REF TIME\nAXES X  Z\nL1000 X1\n"}, {2, 9, "axis Z is not configured"}, {}, m);
   // The master axis too.
@@ -128,7 +128,7 @@ TEST(BadInput, SignalChangeDuringTheRunMakesTheReferenceGoBack) {
   o.values.signals[1001] = 0;
   o.values.signal_changes.push_back({1.2, 1001, -900});
   std::vector<Table> t{parse_table(kHead + "L1000 X1\nL1500 X2\nL2000 X3 SFT=R1001\n", "sig.tbl")};
-  TablePlan plan = plan_tables(t, test_machine(), o);
+  TablePlan plan = plan_tables(t, stiff_machine(), o);
   EXPECT_FALSE(plan.has_errors());
   std::size_t delivered = 0;
   try {

@@ -25,7 +25,7 @@ const char* kTooFastLinear = "REF TIME\nAXES X\nL1000 X100\n   L1500 X200\nL3000
 
 TEST(Limits, SpeedViolationNamesTheRowAndRefusesTheRun) {
   std::vector<Table> t{parse_table(kTooFastLinear, "fast.tbl")};
-  TablePlan plan = plan_tables(t, test_machine(), {});
+  TablePlan plan = plan_tables(t, stiff_machine(), {});  // the speed alone
   auto errors = of(plan, Sev::kError);
   ASSERT_EQ(errors.size(), 1U);
   EXPECT_EQ(errors[0].file, "fast.tbl");
@@ -44,20 +44,23 @@ TEST(Limits, SpeedViolationNamesTheRowAndRefusesTheRun) {
   EXPECT_FALSE(called);
 }
 
-TEST(Limits, LinearVelocityStepsAreWarningsAtTheirRows) {
+TEST(Limits, LinearVelocityStepsAreErrorsAtTheirRowsAndRefuseTheRun) {
   // 100 mm/s appears in one 1 ms cycle at L0 (line 3) and vanishes at L1000 (line 4):
   // 100 000 mm/s² > 2 000 mm/s².
   std::vector<Table> t{parse_table("REF TIME\nAXES X\nL0 X0\nL1000 X100\nL2000 X100\n", "s.tbl")};
   TablePlan plan = plan_tables(t, test_machine(), {});
-  EXPECT_FALSE(plan.has_errors());
-  auto w = of(plan, Sev::kWarning);
-  ASSERT_EQ(w.size(), 2U);  // the start of the move (line 3) and its end (line 4)
-  EXPECT_EQ(w[0].line, 3U);
-  EXPECT_EQ(w[1].line, 4U);
-  EXPECT_NE(w[0].message.find("100000 mm/s²"), std::string::npos) << w[0].message;
+  EXPECT_TRUE(plan.has_errors());
+  auto e = of(plan, Sev::kError);
+  ASSERT_EQ(e.size(), 2U);  // the start of the move (line 3) and its end (line 4)
+  EXPECT_EQ(e[0].line, 3U);
+  EXPECT_EQ(e[1].line, 4U);
+  EXPECT_NE(e[0].message.find("100000 mm/s²"), std::string::npos) << e[0].message;
+  // What would make it fit: 100 mm/s / 2000 mm/s² = 50 ms of post filter.
+  EXPECT_NE(e[0].message.find("post_filter_s >= 0.05 s"), std::string::npos) << e[0].message;
+  EXPECT_THROW(run_tables(plan, [](const TableSample&) {}), InputError);
 }
 
-TEST(Limits, LinearStepWarningsAreListedForFiveRowsThenCounted) {
+TEST(Limits, LinearStepErrorsAreListedForFiveRowsThenCounted) {
   // A zig-zag of 12 rows: every control point steps the velocity.
   std::string text = "REF TIME\nAXES X\n";
   for (int i = 1; i <= 12; ++i) {
@@ -65,12 +68,53 @@ TEST(Limits, LinearStepWarningsAreListedForFiveRowsThenCounted) {
   }
   std::vector<Table> t{parse_table(text, "z.tbl")};
   TablePlan plan = plan_tables(t, test_machine(), {});
-  auto w = of(plan, Sev::kWarning);
-  ASSERT_EQ(w.size(), 6U);
-  EXPECT_EQ(w[0].line, 3U);
-  EXPECT_EQ(w[4].line, 7U);
-  EXPECT_EQ(w[5].line, 1U);
-  EXPECT_NE(w[5].message.find("at 7 more control points"), std::string::npos) << w[5].message;
+  auto e = of(plan, Sev::kError);
+  ASSERT_EQ(e.size(), 6U);
+  EXPECT_EQ(e[0].line, 3U);
+  EXPECT_EQ(e[4].line, 7U);
+  EXPECT_EQ(e[5].line, 1U);
+  EXPECT_NE(e[5].message.find("at 7 more control points"), std::string::npos) << e[5].message;
+}
+
+// Largest finite-difference acceleration of `axis` over the run, units/s².
+double measured_accel(const std::vector<TableSample>& s, std::size_t axis, double period_s) {
+  double amax = 0;
+  for (std::size_t i = 2; i < s.size(); ++i) {
+    amax =
+        std::max(amax, std::abs(fd_velocity(s, axis, i) - fd_velocity(s, axis, i - 1)) / period_s);
+  }
+  return amax;
+}
+
+TEST(Limits, PostFilterSpreadsLinearStepsWithinTheAxisLimit) {
+  // Steps of 100 mm/s: a 50 ms moving average makes them ramps of 2000 mm/s².
+  const char* text = "REF TIME\nAXES X\nL0 X0\nL1000 X100\nL2000 X100\n";
+  MachineConfig m = test_machine();
+  m.post_filter_s = 0.04;  // 2500 mm/s²: still refused, naming the rows
+  EXPECT_TRUE(plan_tables({parse_table(text, "s.tbl")}, m, {}).has_errors());
+  m.post_filter_s = 0.05;
+  TableRun r = run_texts({text}, {}, m);
+  EXPECT_FALSE(r.plan.has_errors());
+  EXPECT_TRUE(of(r.plan, Sev::kWarning).empty());
+  EXPECT_LE(measured_accel(r.samples, kX, m.period_s), 2000 * 1.001);
+  EXPECT_GT(measured_accel(r.samples, kX, m.period_s), 2000 * 0.99);  // the ramp is 50 ms, no more
+  // The filter settles on the end point: 49 cycles after the table's last control point.
+  EXPECT_NEAR(r.samples.back().position[kX], 100.0, 1e-9);
+  EXPECT_NEAR(r.samples.back().t_s, 2.049, 1e-9);
+  // Half-way through the ramp the axis lags the table by half the window: 25 ms at 100 mm/s.
+  EXPECT_NEAR(time_reaching(r.samples, kX, 50.0), 0.5 + 0.0245, 0.0011);
+}
+
+TEST(Limits, SlowToFitCoversLinearSteps) {
+  // 100 000 mm/s² within one cycle: the reference runs 50 times slower (a scales with 1/k here:
+  // the step stays one cycle long).
+  RunOptions o;
+  o.settings.slow_to_fit = true;
+  TableRun r = run_texts({"REF TIME\nAXES X\nL0 X0\nL1000 X100\nL2000 X100\n"}, o, test_machine());
+  EXPECT_NEAR(r.plan.slow_factor, 50.0, 1e-6);
+  EXPECT_FALSE(r.plan.has_errors());
+  EXPECT_LE(measured_accel(r.samples, kX, 0.001), 2000 * 1.001);
+  EXPECT_NEAR(r.samples.back().t_s, 2.0 * 50.0, 0.0011);
 }
 
 TEST(Limits, CubicAccelerationViolationIsAnError) {
@@ -87,7 +131,7 @@ TEST(Limits, CubicAccelerationViolationIsAnError) {
 TEST(Limits, SlowToFitRunsTheReferenceSlowerAndStaysWithinLimits) {
   RunOptions o;
   o.settings.slow_to_fit = true;
-  TableRun r = run_texts({kTooFast}, o);
+  TableRun r = run_texts({kTooFast}, o, test_machine());
   // The cubic segment L1000→L1500 needs the largest factor; after slowing, the measured speed
   // and acceleration stay within the limits.
   EXPECT_GT(r.plan.slow_factor, 1.2);
@@ -123,7 +167,7 @@ TEST(Limits, MasterAxisTooFast) {
   RunOptions o;
   o.reference = ReferenceSource::master_axis(0, 20000);
   std::vector<Table> t{parse_table("REF AXIS Y\nAXES X\nL0 X0\nL50 X1\n", "m.tbl")};
-  TablePlan plan = plan_tables(t, test_machine(), o);
+  TablePlan plan = plan_tables(t, stiff_machine(), o);
   auto errors = of(plan, Sev::kError);
   ASSERT_EQ(errors.size(), 1U);
   EXPECT_EQ(errors[0].line, 1U);

@@ -115,7 +115,7 @@ TEST(Cyclic, RepetitionCountFromOptionsAndShiftsPerRepetition) {
 TEST(Cyclic, LeadInIsNotRepeated) {
   // The machine starts at X = 5; the cycle is the rows L500 … L1500 (period 1000 ms). The
   // lead-in 0 … 500 ms brings X from 5 to 0 once.
-  MachineConfig m = test_machine();
+  MachineConfig m = stiff_machine();
   m.start_position[kX] = 5;
   TableRun r = run_texts({"REF TIME\nAXES X\nCYCLIC 2\nL500 X0\nL1000 X10\nL1500 X0\n"}, {}, m);
   EXPECT_NEAR(r.samples[250].position[kX], 2.5, 1e-12);
@@ -208,7 +208,7 @@ TEST(MultiAxis, RowsDriveSeveralAxesAndMCodesFireAtTheirPoints) {
 }
 
 TEST(MultiAxis, StartPositionOfUnwrittenAxesComesFromTheMachine) {
-  MachineConfig m = test_machine();
+  MachineConfig m = stiff_machine();
   m.start_position[kX] = 5;
   m.start_position[kY] = 7;
   TableRun r = run_texts({"REF TIME\nAXES X\nL1000 X15\n"}, {}, m);

@@ -61,14 +61,14 @@ TEST(SeedFigures, Fig1Sft200KeepsTheGaps) {
 
 // Fig. 2C moves 100 mm in 500 ms (12 000 mm/min): more than the test machine's 10 000 mm/min.
 MachineConfig fast_machine() {
-  MachineConfig m = test_machine();
+  MachineConfig m = stiff_machine();
   m.axes[kX].max_speed_mm_min = 15000;
   return m;
 }
 
 TEST(SeedFigures, Fig2cExceedsA10000MmMinAxisAtTheShiftedRow) {
   std::vector<Table> t{parse_table(read_example("fig2c-cancel.tbl"), "fig2c-cancel.tbl")};
-  TablePlan plan = plan_tables(t, test_machine(), {});
+  TablePlan plan = plan_tables(t, stiff_machine(), {});
   ASSERT_TRUE(plan.has_errors());
   EXPECT_EQ(plan.diagnostics.front().line, 7U);  // L2000 X200.0 SFT-500
 }

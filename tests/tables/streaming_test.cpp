@@ -21,7 +21,7 @@ std::size_t allocations_for(std::uint32_t reps, std::uint64_t& cycles) {
                   "L240 X1 Z-4 M7\nL360 X0 Z0\n",
                   "cam.tbl"),
       parse_table("REF SPINDLE\nAXES Y\nCYCLIC\nL0 Y0\nL180 Y1\nL360 Y0\n", "y.tbl")};
-  TablePlan plan = plan_tables(t, test_machine(), o);
+  TablePlan plan = plan_tables(t, stiff_machine(), o);
   double max_x = 0;
   const long before = cncore::testing::allocations();
   RunSummary s =
