@@ -292,7 +292,7 @@ TEST_F(Cli, MisspelledCommandsAndOptionsGetASuggestion) {
   EXPECT_EQ(c.code, 2);
   EXPECT_EQ(
       c.err.rfind("cncore: error: unknown command 'runn'; did you mean 'run'? (commands: run, "
-                  "check, table, machine)\n",
+                  "check, table, machine, ",
                   0),
       0u)
       << c.err;
