@@ -17,12 +17,15 @@
 // (planner/curve_fit.hpp: every point of the curve within the tolerance of the chords and every
 // point of the chords within the tolerance of the curve, curve ends on programmed vertices) by
 // doubling its length, then bisecting; a chord no curve fits goes out as programmed. After a
-// curve, the next one is first sought among the arcs that leave along its end tangent (an arc
-// spline without kinks); only where none fits, among all. A curve
-// never makes the joint before it turn more than the chords did there (or than free_turn_rad),
-// nor the joint after it more than that or than its own end differs from its last chord: an
-// arc through two chords of a polygon turns away from its neighbours by half its own turn, and
-// the look-ahead would pass those joints slower than the chords' corners.
+// curve, the arc that leaves along its end tangent is taken when it fits at least as many
+// chords as any other curve (an arc spline without kinks). The joints (keeps_joints()): a curve
+// never makes the joint before it turn more than the chords did there (or than free_turn_rad):
+// an arc through two chords of a polygon turns away from its neighbours by half its own turn,
+// and the look-ahead would pass those joints slower than the chords' corners. It ends along the
+// data's own direction (the chord over ±50 tolerances, where the run goes on that far in 4
+// chords or more, within the free turn or half the data's turn over that span), so that it does
+// not reach past an inflection; else its end turns against the next chord no more than the
+// chords did, the free turn, or its own end differs from its last chord.
 //
 // The tolerance of a block is G64 Q (Block::smooth_tolerance_mm; 0: off), else the machine's
 // [motion] smooth_tolerance_mm (0 by default: off), and never more than its contour tolerance
