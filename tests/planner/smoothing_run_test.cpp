@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "config/machine_config.hpp"
+#include "core/error.hpp"
 #include "files.hpp"
 #include "limits.hpp"
 #include "program_blocks.hpp"
@@ -321,6 +322,23 @@ TEST(SmoothingRun, GcodeQSwitchesItPerProgram) {
   expect_sound(q_off, "G64 Q0");
   EXPECT_LT(q_on.kernel_blocks, 10u);    // 2 515 chords: arcs
   EXPECT_GT(q_off.kernel_blocks, 400u);  // chords (those within 0.5 µm of a line merged)
+}
+
+// An error in the program after a run of chords: the curves held by the stage still go out,
+// and the run stops at the end of the last good block, as without smoothing.
+TEST(SmoothingRun, AnErrorAfterChordsStopsAtTheLastGoodBlock) {
+  const std::string c = chords(
+      [](double u) {
+        return Vec3{20 * std::cos(kPi * u), 20 * std::sin(kPi * u), 0};
+      },
+      kPi * 20, 0.05, 4);
+  const fs::path p =
+      program_file("error.ngc", "G21 G90 F5000\nG0 X20 Y0 Z0\n" + c + "G1 X[1/0]\nM30\n");
+  Recorder r;
+  EXPECT_THROW(sim::run_program(p.string(), machine(kTol), {}, {&r}), InputError);
+  ASSERT_FALSE(r.tr.empty());
+  ASSERT_LT(r.blocks.size(), 10u);  // arcs, not the 1 257 chords
+  EXPECT_LE(norm(r.tr.pos.back().xyz() - Vec3{-20, 0, 0}), 1e-9);
 }
 
 }  // namespace
