@@ -107,7 +107,7 @@ void expect_sound(const Measured& r, const std::string& what) {
   EXPECT_LE(r.polyline_error_mm, kTol + 1e-9) << what;
 }
 
-// Circles of R 20 at F5000 (the CAM circle of the issue) and helices of R 10, 3 turns of 1 mm:
+// Circles of R 20 at F5000 (a CAM circle) and helices of R 10, 3 turns of 1 mm:
 // chords of 0.001–0.5 mm with 3–5 decimals against the shape as G3 arcs.
 TEST(SmoothingRun, CirclesAndHelicesOfChordsRunInTheTimeOfTheShape) {
   const MachineConfig m = machine(kTol);
@@ -203,7 +203,7 @@ TEST(SmoothingRun, ArcWaveRasterOfChordsStaysWithinTheTolerance) {
       const fs::path p = program_file("wave.ngc", arc_wave_raster(chord_mm, decimals));
       const Measured r = run(p, m);
       expect_sound(r, "arc waves, " + tag);
-      // The issue's 1.05 × is not reached here: where a fit reaches past an inflection the
+      // 1.05 × the arcs is not reached here: where a fit reaches past an inflection the
       // curves meet at small kinks (docs/smoothing.md, "What is left"); measured worst 1.22 ×.
       EXPECT_LE(r.time_s, 1.25 * arcs.time_s) << tag;
       // the arcs run within the chords' sagitta (≤ 6.3 µm) of the chords: the same shape
