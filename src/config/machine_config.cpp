@@ -97,6 +97,10 @@ void read_motion(const Reader& r, const toml::table& t, MachineConfig& c) {
       c.contour_tolerance_mm = r.number_in(key, node, name, 0, true, 10, "mm");
     } else if (k == "merge_tolerance_mm") {
       c.merge_tolerance_mm = r.number_in(key, node, name, 0, false, 0.001, "mm");
+    } else if (k == "smooth_tolerance_mm") {
+      c.smooth_tolerance_mm = r.number_in(key, node, name, 0, false, 1, "mm");
+    } else if (k == "smooth_corner_deg") {
+      c.smooth_corner_deg = r.number_in(key, node, name, 0, false, 180, "deg");
     } else if (k == "post_filter_s") {
       c.post_filter_s = r.number_in(key, node, name, 0, false, 1, "s");
     } else if (k == "lookahead_blocks") {
@@ -549,6 +553,10 @@ std::string machine_config_to_toml(const MachineConfig& c) {
        "largest allowed deviation from the path (corner rounding), mm (> 0)");
   line("merge_tolerance_mm = " + num(c.merge_tolerance_mm),
        "collinear G0/G1 pieces within this of one line run as that line, mm; 0 = off (<= 0.001)");
+  line("smooth_tolerance_mm = " + num(c.smooth_tolerance_mm),
+       "G1 chords within this of one line/arc/helix run as that curve, mm; 0 = off (<= 1)");
+  line("smooth_corner_deg = " + num(c.smooth_corner_deg),
+       "smoothing keeps joints turning more than this between chords longer than the tolerance");
   line("post_filter_s = " + num(c.post_filter_s),
        "per-axis post-interpolation moving average, s; 0 = off (<= 1)");
   line("lookahead_blocks = " + std::to_string(c.lookahead_blocks),

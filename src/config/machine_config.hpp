@@ -92,6 +92,11 @@ struct MachineConfig {
   // Consecutive G0/G1 pieces whose vertices lie within this of one straight line run as that
   // line (planner/line_merge.hpp); 0: off. ≤ 1 µm (spec 01 P1).
   double merge_tolerance_mm = 0.0005;
+  // G1 chords within this of one line, arc or helix run as that curve (planner/path_smoother.hpp;
+  // G64 Q overrides it per program); 0: off. Joints turning by more than smooth_corner_deg
+  // between chords longer than the tolerance stay corners.
+  double smooth_tolerance_mm = 0;
+  double smooth_corner_deg = 30;
   double post_filter_s = 0;                // per-axis post-interpolation moving average; 0: off
   std::uint32_t lookahead_blocks = 10000;  // capacity of the execution-data buffer
   double max_override_pct = 200;           // highest feed override accepted

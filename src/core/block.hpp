@@ -42,6 +42,9 @@ struct Block {
   double feed_mm_min = 0;  // programmed path feed (converted to mm/min); 0 for kRapid
   PathMode path_mode = PathMode::kBlend;
   double tolerance_mm = -1;  // G64 P value; < 0: the machine's contour tolerance
+  // G64 Q value: G1 chords within it of one curve run as that curve (planner/path_smoother.hpp);
+  // 0: off; < 0: the machine's smooth_tolerance_mm.
+  double smooth_tolerance_mm = -1;
   // Direction feed correction (spec 03), set by the stage between interpreter and planner
   // (src/feedcontrol/direction_correction): the coefficient C already applied to feed_mm_min
   // (NaN: no correction stage; 1: a move it leaves alone, e.g. G0), and whether the operator's

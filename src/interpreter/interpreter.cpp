@@ -418,6 +418,11 @@ void Interpreter::Impl::execute_words() {
         if (w['p'].value < 0) fail(w['p'].col, "negative G64 tolerance P");
         modal_.tolerance_mm = w['p'].value * unit;
       }
+      modal_.smooth_tolerance_mm = -1;
+      if (w.has('q')) {
+        if (w['q'].value < 0) fail(w['q'].col, "negative G64 smoothing tolerance Q");
+        modal_.smooth_tolerance_mm = w['q'].value * unit;
+      }
     }
   }
   // 21 distance mode, 22 arc distance mode
@@ -573,6 +578,7 @@ void Interpreter::Impl::emit_motion(BlockKind kind, const AxisVec& target, std::
   b.path_mode =
       words_.group(GGroup::kExactStopOnce) != nullptr ? PathMode::kExactStop : modal_.path_mode;
   b.tolerance_mm = b.path_mode == PathMode::kBlend ? modal_.tolerance_mm : -1;
+  b.smooth_tolerance_mm = modal_.smooth_tolerance_mm;
   out_.push_back(b);
 }
 

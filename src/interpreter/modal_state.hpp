@@ -21,6 +21,7 @@ struct ModalState {
   int coord_system = 1;                   // group 12: 1 = G54 … 6 = G59, 7…9 = G59.1…G59.3
   PathMode path_mode = PathMode::kBlend;  // group 13: G64
   double tolerance_mm = -1;               // G64 P (mm); < 0: none given
+  double smooth_tolerance_mm = -1;        // G64 Q (mm); < 0: none given
 
   double feed_mm_min = 0;  // F, converted to mm/min when it is read
   bool feed_set = false;   // an F word has been seen

@@ -19,30 +19,45 @@ BlockSource::BlockSource(std::unique_ptr<interp::Interpreter> interpreter,
     : modes_(modes),
       interpreter_(std::move(interpreter)),
       corrector_(std::make_unique<feed::DirectionCorrector>(machine, program_name)),
+      smoother_(smoothing_settings(machine, kernel)),
       merger_(make_line_merger(machine, kernel)) {}
 
 BlockSource::~BlockSource() = default;
 
 BlockSource::Status BlockSource::next(Block& out) {
   if (error_) {
-    // The line merged up to the error goes out first: the run stops at the end of the last
-    // good block, as without the merge.
-    return merger_.next(out) ? Status::kBlock : Status::kInputError;
+    // The curve and the line held at the error go out first: the run stops at the end of the
+    // last good block, as without smoothing and merging.
+    return drain(out) ? Status::kBlock : Status::kInputError;
   }
   try {
     return produce(out) ? Status::kBlock : Status::kEnd;
   } catch (const InputError&) {
     error_ = std::current_exception();
-    merger_.finish();
-    return merger_.next(out) ? Status::kBlock : Status::kInputError;
+    smoother_.finish();
+    return drain(out) ? Status::kBlock : Status::kInputError;
   }
+}
+
+bool BlockSource::drain(Block& block) {
+  while (true) {
+    if (merger_.next(block)) return true;
+    if (!smoother_.next(smoothed_)) break;
+    merger_.put(smoothed_);
+  }
+  merger_.finish();
+  return merger_.next(block);
 }
 
 bool BlockSource::produce(Block& block) {
   while (true) {
     if (merger_.next(block)) return true;
+    if (smoother_.next(smoothed_)) {
+      merger_.put(smoothed_);
+      continue;
+    }
     if (corrector_->next(corrected_)) {
-      merger_.put(corrected_);
+      smoother_.put(corrected_);
       continue;
     }
     if (wait_pending_) {  // single-block stop: the wait after the block just handed on
@@ -52,6 +67,11 @@ bool BlockSource::produce(Block& block) {
     }
     if (more_) more_ = interpreter_->next(source_);
     if (!more_) {
+      if (!ended_) {
+        ended_ = true;
+        smoother_.finish();
+        continue;
+      }
       merger_.finish();
       return merger_.next(block);
     }

@@ -1,9 +1,9 @@
 // The blocks the motion cycle takes, in the order every driver must take them: interpreter →
-// operator modes (dry run, single block) → direction correction (spec 03) → collinear pieces
-// merged (planner/line_merge). `cncore run` (run_program), the pulled ProgramStepper and the
-// controller's planning thread (`cncore serve`) all read their blocks from here, so they plan
-// exactly the same path. One kernel block per call, reading source blocks only as needed:
-// memory stays bounded whatever the program length.
+// operator modes (dry run, single block) → direction correction (spec 03) → path smoothing
+// (planner/path_smoother) → collinear pieces merged (planner/line_merge). `cncore run`
+// (run_program), the pulled ProgramStepper and the controller's planning thread (`cncore serve`)
+// all read their blocks from here, so they plan exactly the same path. One kernel block per call,
+// reading source blocks only as needed: memory stays bounded whatever the program length.
 #pragma once
 
 #include <algorithm>
@@ -16,6 +16,7 @@
 #include "interpreter/interpreter.hpp"
 #include "motion/kernel.hpp"
 #include "planner/line_merge.hpp"
+#include "planner/path_smoother.hpp"
 #include "simulation/operator_modes.hpp"
 
 namespace cncore::feed {
@@ -31,6 +32,16 @@ inline planner::LineMerger make_line_merger(const MachineConfig& machine,
                                             const motion::KernelOptions& kernel) {
   const double top_mm_s = std::max(machine.max_feed_mm_min, machine.rapid_mm_min) / 60;
   return {kernel.mode == motion::Mode::kStop ? 0.0 : machine.merge_tolerance_mm,
+          planner::LineMerger::max_turn_rad(machine.max_accel_mm_s2, machine.period_s, top_mm_s)};
+}
+
+// The path smoothing stage (planner/path_smoother.hpp) for this machine; off in stop mode.
+inline planner::SmoothingSettings smoothing_settings(const MachineConfig& machine,
+                                                     const motion::KernelOptions& kernel) {
+  const bool stop = kernel.mode == motion::Mode::kStop;
+  const double top_mm_s = std::max(machine.max_feed_mm_min, machine.rapid_mm_min) / 60;
+  return {stop ? 0.0 : machine.smooth_tolerance_mm, machine.smooth_corner_deg,
+          stop ? 0.0 : machine.contour_tolerance_mm, machine.merge_tolerance_mm,
           planner::LineMerger::max_turn_rad(machine.max_accel_mm_s2, machine.period_s, top_mm_s)};
 }
 
@@ -64,15 +75,18 @@ class BlockSource {
 
  private:
   bool produce(Block& block);
+  bool drain(Block& block);  // the blocks the smoother and the merger hold, after an error
 
   OperatorModes modes_;
   Block wait_;  // the wait a single-block stop hands on after a block
   bool wait_pending_ = false;
   std::unique_ptr<interp::Interpreter> interpreter_;
   std::unique_ptr<feed::DirectionCorrector> corrector_;
+  planner::PathSmoother smoother_;
   planner::LineMerger merger_;
-  Block source_, corrected_;
-  bool more_ = true;  // the interpreter may still produce blocks
+  Block source_, corrected_, smoothed_;
+  bool more_ = true;    // the interpreter may still produce blocks
+  bool ended_ = false;  // the smoother has been told the program ended
   std::uint64_t motion_blocks_ = 0;
   std::exception_ptr error_;
 };
