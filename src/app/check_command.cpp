@@ -25,10 +25,13 @@ int command_check(const CheckArgs& a) {
     out.clear();
   };
   // Every error is reported: after one, the interpreter goes on with the next line. Errors
-  // after the first may be its consequences; a repeated error or too many end the check.
+  // after the first may be its consequences; a repeated error or too many end the check. After
+  // a move beyond the travel the later blocks are not judged against the travel until they
+  // return inside it (one note says so).
   constexpr int kMaxErrors = 50;
   int errors = 0;
   std::string last_error;
+  bool noted = false;  // the note on blocks continuing beyond the travel was printed
   for (;;) {
     try {
       if (!interpreter.next(b)) break;
@@ -44,6 +47,13 @@ int command_check(const CheckArgs& a) {
         break;
       }
       if (!interpreter.recover()) break;
+      if (interpreter.beyond_travel() && !noted) {
+        noted = true;
+        std::cerr << fmt::format(
+            "{}:{}:{}: note: the blocks after this one continue from its end point, beyond the "
+            "travel; their travel is not checked until a move ends inside it again\n",
+            e.file(), e.line(), e.col());
+      }
       continue;
     }
     ++blocks;

@@ -32,6 +32,11 @@ struct Block {
   // A line merged from collinear pieces (planner/line_merge.hpp): the source line of its last
   // piece (`line` is its first's). 0: the block is one source block.
   std::uint32_t last_line = 0;
+  // A merged line: the number of programmed pieces it was merged from. They follow it, each a
+  // Block with `piece` set, so that observers and the kernel's line attribution see the program
+  // as written (the planner plans the merged line only). 0: not merged.
+  std::uint32_t pieces = 0;
+  bool piece = false;  // one programmed piece of the merged line before it
   // A merged line: the unit directions of its first and last pieces (zero: not merged). The
   // corners at its ends are the pieces' corners; the planner passes them no faster than those.
   Vec3 first_piece_dir, last_piece_dir;

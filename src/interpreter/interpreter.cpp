@@ -93,6 +93,14 @@ bool Interpreter::Impl::next(Block& out) {
 }
 
 bool Interpreter::Impl::recover() {
+  // A move beyond the travel: the blocks after it were written from its end point, not from
+  // the last position reached; continue from there rather than judge them against a start
+  // the program never meant.
+  if (travel_failed_) {
+    pos_ = travel_target_;
+    beyond_travel_ = true;
+  }
+  travel_failed_ = false;
   out_.clear();
   out_head_ = 0;
   words_.clear();
@@ -551,14 +559,26 @@ AxisVec Interpreter::Impl::target_from_words(bool machine_coords) const {
   return target;
 }
 
-void Interpreter::Impl::check_travel(const AxisVec& lo, const AxisVec& hi,
-                                     std::uint32_t col) const {
+void Interpreter::Impl::check_travel(const AxisVec& lo, const AxisVec& hi, const AxisVec& target,
+                                     std::uint32_t col) {
+  constexpr double kSlack = 1e-9;
+  if (beyond_travel_) {
+    bool inside = true;
+    for (std::size_t a = 0; a < kMaxAxes; ++a) {
+      const AxisConfig& ax = machine_.axes[a];
+      if (!ax.enabled || ax.max_mm <= ax.min_mm) continue;
+      inside = inside && hi[a] <= ax.max_mm + kSlack && lo[a] >= ax.min_mm - kSlack;
+    }
+    if (!inside) return;  // still out there, as a consequence of the first error
+    beyond_travel_ = false;
+  }
+  travel_target_ = target;
+  travel_failed_ = true;  // cleared below when the move stays inside
   for (std::size_t a = 0; a < kMaxAxes; ++a) {
     const AxisConfig& ax = machine_.axes[a];
     if (!ax.enabled || ax.max_mm <= ax.min_mm) continue;  // rotary without limits
     const auto& word = words_[kAxisWords[a]];
     const std::uint32_t c = word.present ? word.col : col;
-    constexpr double kSlack = 1e-9;
     if (hi[a] > ax.max_mm + kSlack) {
       fail(c, fmt::format("{} {:.3f} is beyond the travel limit {:.3f}", kAxisLetters[a], hi[a],
                           ax.max_mm));
@@ -568,6 +588,7 @@ void Interpreter::Impl::check_travel(const AxisVec& lo, const AxisVec& hi,
                           ax.min_mm));
     }
   }
+  travel_failed_ = false;
 }
 
 void Interpreter::Impl::emit_motion(BlockKind kind, const AxisVec& target, std::uint32_t col) {
@@ -589,7 +610,7 @@ void Interpreter::Impl::line_motion(const AxisVec& target, std::uint32_t col) {
     fail(col, "no feed rate: program F before the first G1/G2/G3");
   }
   if (!rapid && modal_.feed_mm_min <= 0) fail(col, "feed rate F is zero");
-  check_travel(target, target, col);
+  check_travel(target, target, target, col);
   double len2 = 0;
   for (std::size_t a = 0; a < kMaxAxes; ++a) len2 += (target[a] - pos_[a]) * (target[a] - pos_[a]);
   if (len2 > kZeroMoveMm * kZeroMoveMm) {
@@ -669,7 +690,7 @@ void Interpreter::Impl::arc(const AxisVec& target, bool ccw, std::uint32_t col) 
     hi[pa.first] = hi2.a;
     hi[pa.second] = hi2.b;
   }
-  check_travel(lo, hi, col);
+  check_travel(lo, hi, target, col);
 
   Block b = base_block(BlockKind::kArc);
   b.col = col;
@@ -801,6 +822,9 @@ bool Interpreter::next(Block& out) {
 
 bool Interpreter::recover() {
   return impl_->recover();
+}
+bool Interpreter::beyond_travel() const {
+  return impl_->beyond_travel_;
 }
 
 }  // namespace cncore::interp

@@ -44,7 +44,12 @@ class Interpreter {
   // following line, so that `cncore check` can report every error of a program. Returns false
   // when nothing can follow (the error was found at the end of the program). Later errors may
   // be consequences of the first (the failing line's modal changes may be half applied).
+  // After a move beyond the travel, the interpreter continues from that move's end point (the
+  // later blocks were written from there) and judges no travel again until a move ends inside
+  // it: see beyond_travel().
   bool recover();
+  // True while the interpreter continues from a position beyond the travel after recover().
+  bool beyond_travel() const;
 
   // The numbered parameters first…last as they stand now (a controller keeps LinuxCNC's
   // persistent range 5161…5390 between programs: offsets, G28/G30 positions).

@@ -143,7 +143,9 @@ struct Interpreter::Impl final : LiveParameters {
   void line_motion(const AxisVec& target, std::uint32_t col);  // G0 / G1
   void arc(const AxisVec& target, bool ccw, std::uint32_t col);
   void emit_motion(BlockKind kind, const AxisVec& target, std::uint32_t col);
-  void check_travel(const AxisVec& lo, const AxisVec& hi, std::uint32_t col) const;
+  // The move to `target` sweeps lo … hi: an error if that leaves the travel (not while the
+  // program continues beyond it after such an error, see recover()).
+  void check_travel(const AxisVec& lo, const AxisVec& hi, const AxisVec& target, std::uint32_t col);
   void set_offsets();        // G10, G92 family
   void go_home(int code10);  // G28 / G30 (and .1)
   AxisVec target_from_words(bool machine_coords) const;
@@ -177,6 +179,12 @@ struct Interpreter::Impl final : LiveParameters {
   ModalState modal_;
   Words words_;
   AxisVec pos_;  // machine coordinates, mm / deg
+  // A move found beyond the travel (its target), for recover(); and whether the interpreter
+  // continues from such a target: later blocks are written from there, and their travel is not
+  // judged again until the program comes back inside it.
+  bool travel_failed_ = false;
+  AxisVec travel_target_;
+  bool beyond_travel_ = false;
 
   std::vector<Block> out_;  // blocks of the current line, handed out by next()
   std::size_t out_head_ = 0;

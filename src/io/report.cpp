@@ -16,7 +16,7 @@ namespace cncore::io {
 namespace {
 
 constexpr std::size_t kSlowCandidates = 64;
-constexpr std::size_t kMatchWindow = 16;
+constexpr std::size_t kMatchWindow = 4096;  // a cycle may pass hundreds of sub-µm pieces
 
 double deg(double rad) {
   return rad * 180 / std::numbers::pi;
@@ -77,6 +77,7 @@ ReportObserver::ReportObserver(const MachineConfig& machine, std::string mode,
 }
 
 void ReportObserver::on_block(const Block& b) {
+  if (b.pieces > 0) return;  // a merged line: its programmed pieces follow, the samples name them
   const bool motion = is_motion(b);
   if (!motion) {
     if (b.kind == BlockKind::kDwell || (b.kind == BlockKind::kAux && b.aux_waits)) {

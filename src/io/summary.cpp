@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/atomic_file.hpp"
+#include "motion/piece_lines.hpp"
 
 namespace cncore::io {
 
@@ -16,7 +17,8 @@ namespace {
 
 constexpr std::size_t kSlowCandidates = 64;  // bounded candidate set for the slowest spots
 constexpr std::size_t kSlowReported = 5;
-constexpr std::size_t kMatchWindow = 16;  // blocks searched ahead when the line changes
+// Blocks searched ahead when the line changes: a cycle may pass hundreds of sub-µm pieces.
+constexpr std::size_t kMatchWindow = 4096;
 
 std::string axis_name(std::size_t i) {
   return {static_cast<char>(std::tolower(static_cast<unsigned char>(kAxisLetters[i])))};
@@ -57,8 +59,12 @@ double segment_distance(Vec3 p, Vec3 a, Vec3 b) {
 
 SummaryObserver::SummaryObserver(const MachineConfig& machine, std::string mode)
     : machine_(machine),
-      // on_block keeps at most lookahead_blocks + 1024 after each push: the ring never grows.
-      pending_(static_cast<std::size_t>(machine.lookahead_blocks) + 1025),
+      // The kernel holds at most its buffer's blocks and its ring's pieces; on_block keeps no
+      // more than that + 1024 (the ring grows to it only as far as a program fills it).
+      pending_(1024),
+      pending_max_(static_cast<std::size_t>(machine.lookahead_blocks) +
+                   motion::PieceLines::kCapacity + 1024),
+      recent_(kRecent),
       diff_(machine) {
   summary_.mode = std::move(mode);
   // Window of on-path points searched for the contour error: the post-interpolation filter
@@ -66,6 +72,7 @@ SummaryObserver::SummaryObserver(const MachineConfig& machine, std::string mode)
   // corners on its own.
   const double window_s = std::max(machine.post_filter_s, 0.02);
   const double cycles = std::ceil(window_s / machine.period_s) + 2;
+  window_s_ = cycles * machine.period_s;
   path_ring_.resize(static_cast<std::size_t>(std::min(cycles, 512.0)));
   top_.reserve(kSlowCandidates);
   constexpr double kSlack = 1e-6;  // travel_check: a set-point this far outside is still inside
@@ -79,45 +86,154 @@ SummaryObserver::SummaryObserver(const MachineConfig& machine, std::string mode)
 }
 
 void SummaryObserver::on_block(const Block& b) {
+  // A merged line: its programmed pieces follow, and the samples name them.
+  if (b.pieces > 0) return;
   double cap = 0;
   switch (b.kind) {
     case BlockKind::kRapid:
       cap = machine_.rapid_mm_min;
       ++summary_.blocks;
-      pending_.push_back({b.line, cap, cap, true, b.last_line});
+      pending_.push_back({b.line, cap, cap, true, true, false, b.last_line, ProgrammedMove(b)});
       break;
     case BlockKind::kLine:
     case BlockKind::kArc:
       cap = machine_.max_feed_mm_min;
       ++summary_.blocks;
-      pending_.push_back({b.line, std::min(b.feed_mm_min, cap), cap, false, b.last_line});
+      pending_.push_back({b.line, std::min(b.feed_mm_min, cap), cap, false, true, false,
+                          b.last_line, ProgrammedMove(b)});
       break;
     case BlockKind::kDwell:
-      pending_.push_back({b.line, 0, 0, false, 0});
+      pending_.push_back({b.line, 0, 0, false, false, false, 0, ProgrammedMove{}});
       break;
     case BlockKind::kAux:
       break;
   }
-  // The kernel never holds more than its buffer; if lines never match (a kernel that reports
-  // other line numbers), forget the oldest rather than grow.
-  while (pending_.size() > static_cast<std::size_t>(machine_.lookahead_blocks) + 1024) {
-    pending_.pop_front();
+  // The kernel never holds more than its buffer and its pieces; if lines never match (a kernel
+  // that reports other line numbers), forget the oldest rather than grow.
+  while (pending_.size() > pending_max_) pending_.pop_front();
+}
+
+// The block under the tool on `line`, matched in order against the blocks handed to the kernel
+// (index into pending_; the ones before it the tool has passed). kNone when unknown.
+std::size_t SummaryObserver::match(std::uint32_t line) const {
+  // Nearly every sample is on the block at the front: no ring indexing then.
+  if (!pending_.empty() && pending_.front().line == line) return 0;
+  const std::size_t n = std::min(pending_.size(), kMatchWindow);
+  for (std::size_t j = 0; j < n; ++j) {
+    if (pending_[j].line == line) return j;
+  }
+  return kNone;
+}
+
+// The blocks before pending_[j] are passed: into the window of recent moves.
+void SummaryObserver::pass(std::size_t j, double t_s) {
+  for (std::size_t k = 0; k < j; ++k) {
+    if (!pending_[k].motion) continue;
+    recent_[recent_next_] = {pending_[k].move, t_s};
+    recent_next_ = recent_next_ + 1 == recent_.size() ? 0 : recent_next_ + 1;
+    recent_size_ = std::min(recent_size_ + 1, recent_.size());
+  }
+  pending_.drop_front(j);
+}
+
+// Distance from the set-point to the programmed path near the tool: the moves passed within
+// the window (newest first), the block under the tool (pending_[j]) and the two after it.
+// Moves whose bounding sphere lies farther than the best so far are skipped.
+double SummaryObserver::programmed_distance(Vec3 pos, std::size_t j, double t_s) const {
+  double best = std::numeric_limits<double>::infinity();
+  const std::size_t ahead = std::min(pending_.size(), (j == kNone ? 0 : j) + 3);
+  for (std::size_t k = 0; k < ahead; ++k) {
+    const Pending& b = pending_[k];
+    if (b.motion && b.move.distance_bound(pos) < best) {
+      best = std::min(best, b.move.nearest(pos).distance_mm);
+    }
+  }
+  std::size_t i = recent_next_;
+  for (std::size_t k = 0; k < recent_size_; ++k) {
+    i = i == 0 ? recent_.size() - 1 : i - 1;
+    const Passed& p = recent_[i];
+    if (p.t_s < t_s - window_s_) break;
+    if (p.move.distance_bound(pos) < best) best = std::min(best, p.move.nearest(pos).distance_mm);
+  }
+  return best;
+}
+
+// Without programmed moves (a recorded trajectory, a table run): the distance to the polyline of
+// recent on-path points. Ring indices step by compare instead of `%`.
+double SummaryObserver::path_ring_distance(Vec3 pos, double lag_mm) {
+  const std::size_t ring_n = path_ring_.size();
+  double contour = lag_mm;
+  std::size_t newer = ring_next_;
+  for (std::size_t k = 1; k < ring_size_ && contour > 0; ++k) {
+    // newer = ring_next_ − k, older = newer − 1 (mod the ring size)
+    newer = newer == 0 ? ring_n - 1 : newer - 1;
+    const std::size_t older = newer == 0 ? ring_n - 1 : newer - 1;
+    contour = std::min(contour, segment_distance(pos, path_ring_[older], path_ring_[newer]));
+  }
+  return contour;
+}
+
+// Time lost on block b for dt_s of a cycle that moved len_mm on it, against its programmed
+// feed × override: dt − len/F (the cycle ran at v = len/dt: dt·(1 − v/F)), 0 when v ≥ F.
+void SummaryObserver::credit(Pending& b, double dt_s, double len_mm, double override_pct) {
+  if (b.line != group_.line) {
+    close_group();
+    group_.line = b.line;
+  }
+  group_.time_s += dt_s;
+  group_.length_mm += len_mm;
+  if (b.motion && dt_s > 0 && !b.timed) {
+    b.timed = true;
+    ++summary_.blocks_timed;
+  }
+  // F × override, capped: computed again only when one of the three changes (a division per
+  // cycle less; the same double).
+  if (b.feed_mm_min != target_feed_ || b.cap_mm_min != target_cap_ ||
+      override_pct != target_override_) {
+    target_feed_ = b.feed_mm_min;
+    target_cap_ = b.cap_mm_min;
+    target_override_ = override_pct;
+    target_ = std::min(b.feed_mm_min * override_pct / 100, b.cap_mm_min);
+  }
+  const double target = target_;
+  group_.programmed_feed_mm_min = target;
+  group_.rapid = b.rapid;
+  group_.last_line = b.last_line;
+  if (target > 0) {
+    const double lost = dt_s - len_mm * 60 / target;
+    if (lost > 0) {
+      group_.lost_s += lost;
+      summary_.time_lost_s += lost;
+    }
   }
 }
 
-// The programmed feed of the block now executing on `line` (F clamped to the machine's limit),
-// matched in order against the blocks handed to the kernel. Returns -1 when unknown.
-const SummaryObserver::Pending* SummaryObserver::current_block(std::uint32_t line) {
-  // Nearly every sample is on the block at the front: no ring indexing then.
-  if (!pending_.empty() && pending_.front().line == line) return &pending_.front();
-  const std::size_t n = std::min(pending_.size(), kMatchWindow);
-  for (std::size_t j = 0; j < n; ++j) {
-    if (pending_[j].line == line) {
-      pending_.drop_front(j);
-      return &pending_.front();
-    }
+// The cycle from the previous sample to s moved len_mm in dt_s and ended on pending_[j]: the
+// blocks it passed share it by the distance the on-path point covered on each (what is left of
+// the first, the whole of those between, the start of the last), at the cycle's speed.
+void SummaryObserver::share(const motion::Sample& s, std::size_t j, double dt_s, double len_mm) {
+  if (j == 0) {
+    credit(pending_.front(), dt_s, len_mm, s.override_pct);
+    return;
   }
-  return nullptr;
+  const Vec3 path = s.path_position.xyz();
+  auto covered = [&](std::size_t k) {
+    const Pending& b = pending_[k];
+    if (!b.motion) return 0.0;
+    if (k == 0) return b.move.length_mm() - b.move.nearest(prev_path_).along_mm;
+    if (k == j) return b.move.nearest(path).along_mm;
+    return b.move.length_mm();
+  };
+  double total = 0;
+  for (std::size_t k = 0; k <= j; ++k) total += covered(k);
+  if (!(total > 0)) {
+    credit(pending_[j], dt_s, len_mm, s.override_pct);
+    return;
+  }
+  for (std::size_t k = 0; k <= j; ++k) {
+    const double w = covered(k) / total;
+    if (w > 0) credit(pending_[k], dt_s * w, len_mm * w, s.override_pct);
+  }
 }
 
 void SummaryObserver::close_group() {
@@ -252,9 +368,12 @@ void SummaryObserver::sample(const motion::Sample& s) {
     }
   }
 
-  // Contour error: distance from the servo set-point to the polyline of recent on-path points.
-  // Ring indices step by compare instead of `%` (an integer division per sample and two per
-  // point of the window).
+  // The programmed block under the tool (kNone: not known); those before it in pending_ the
+  // tool has passed since the last sample.
+  const std::size_t j = s.line != 0 ? match(s.line) : kNone;
+
+  // Contour error: distance from the servo set-point to the path as programmed near the tool
+  // (the polyline of recent on-path points when no programmed move is known).
   const Vec3 path = s.path_position.xyz();
   const std::size_t ring_n = path_ring_.size();
   path_ring_[ring_next_] = path;
@@ -267,15 +386,10 @@ void SummaryObserver::sample(const motion::Sample& s) {
   // table run may have none).
   const bool on_path = lag2 == 0 && s.feed_mm_min > 0 && std::isfinite(s.feed_mm_min);
   // = norm(pos − path); without a post filter the set-point is on the path (0, no root).
-  double contour = lag2 == 0 ? 0.0 : std::sqrt(lag2);
-  summary_.max_servo_lag_mm = std::max(summary_.max_servo_lag_mm, contour);
-  std::size_t newer = ring_next_;
-  for (std::size_t k = 1; k < ring_size_ && contour > 0; ++k) {
-    // newer = ring_next_ − k, older = newer − 1 (mod the ring size)
-    newer = newer == 0 ? ring_n - 1 : newer - 1;
-    const std::size_t older = newer == 0 ? ring_n - 1 : newer - 1;
-    contour = std::min(contour, segment_distance(pos, path_ring_[older], path_ring_[newer]));
-  }
+  const double lag_mm = lag2 == 0 ? 0.0 : std::sqrt(lag2);
+  summary_.max_servo_lag_mm = std::max(summary_.max_servo_lag_mm, lag_mm);
+  double contour = programmed_distance(pos, j, s.t_s);
+  if (std::isinf(contour)) contour = path_ring_distance(pos, lag_mm);
   summary_.max_contour_error_mm = std::max(summary_.max_contour_error_mm, contour);
 
   {
@@ -315,35 +429,27 @@ void SummaryObserver::sample(const motion::Sample& s) {
           raise_max_quotient(summary_.max_tangential_accel_mm_s2, std::fabs(d.dspeed), h);
         }
       }
-      // Slowest spots: time lost on this line against its programmed feed × override.
-      if (s.line != group_.line) {
-        close_group();
-        group_.line = s.line;
-      }
-      if (s.line != 0) {
+      // Slowest spots: time lost on each block against its programmed feed × override.
+      if (j != kNone) {
+        share(s, j, dt, len);
+      } else if (!pending_.empty() && pending_.front().motion) {
+        // On an event after the block (M2 at the end point, a waiting M code): the cycle that
+        // reached it still belongs to the block.
+        credit(pending_.front(), dt, len, s.override_pct);
+      } else if (s.line != 0) {  // a line not among the blocks: time and length only
+        if (s.line != group_.line) {
+          close_group();
+          group_.line = s.line;
+        }
         group_.time_s += dt;
         group_.length_mm += len;
-        if (const Pending* b = current_block(s.line)) {
-          // F × override, capped: computed again only when one of the three changes (a
-          // division per cycle less; the same double).
-          if (b->feed_mm_min != target_feed_ || b->cap_mm_min != target_cap_ ||
-              s.override_pct != target_override_) {
-            target_feed_ = b->feed_mm_min;
-            target_cap_ = b->cap_mm_min;
-            target_override_ = s.override_pct;
-            target_ = std::min(b->feed_mm_min * s.override_pct / 100, b->cap_mm_min);
-          }
-          const double target = target_;
-          group_.programmed_feed_mm_min = target;
-          group_.rapid = b->rapid;
-          group_.last_line = b->last_line;
-          if (target > 0 && speed * 60 < target) group_.lost_s += dt * (1 - speed * 60 / target);
-        }
       }
       prev_speed_t_ = speed_t;
       prev_on_path_ = on_path;
     }
   }
+  if (j != kNone && j > 0) pass(j, s.t_s);
+  prev_path_ = path;
 }
 
 void SummaryObserver::on_finish() {
@@ -445,6 +551,8 @@ std::string summary_to_json(const Summary& s, const MachineConfig& machine) {
     spots.push_back(o);
   }
   j["slowest_spots"] = spots;
+  j["time_lost_s"] = s.time_lost_s;
+  j["blocks_timed"] = s.blocks_timed;
   nlohmann::ordered_json events = nlohmann::ordered_json::array();
   for (const AuxEvent& e : s.aux_events) {
     events.push_back(
@@ -514,7 +622,9 @@ std::string format_human_summary(const Summary& s, const MachineConfig& machine,
   if (s.slowest.empty()) {
     o += "slowest spots none (the programmed feed is kept everywhere)\n";
   } else {
-    o += "slowest spots time lost against the programmed feed, worst first:\n";
+    o += fmt::format(
+        "slowest spots time lost against the programmed feed ({:.3f} s in all), worst first:\n",
+        s.time_lost_s);
     for (const SlowSpot& p : s.slowest) {
       // A merged line (collinear pieces run as one): the source lines of its first and last piece.
       const std::string where = p.last_line != 0 && p.last_line != p.line

@@ -13,13 +13,15 @@
 #include "config/machine_config.hpp"
 #include "io/differences.hpp"
 #include "io/fifo.hpp"
+#include "io/programmed_path.hpp"
 #include "simulation/run.hpp"
 
 namespace cncore::io {
 
 // A program line where the machine ran below its programmed feed. lost_s is the time spent on
 // the line minus the time the same distance takes at the programmed feed (× override):
-// Σ dt·(1 − v/F) over the line's cycles. Lines are ranked by lost_s.
+// Σ dt·(1 − v/F) over the line's cycles. A cycle that passes several blocks gives each the part
+// of dt its share of the cycle's travel takes. Lines are ranked by lost_s.
 struct SlowSpot {
   std::uint32_t line = 0;
   // A line merged from collinear pieces (Block::last_line): the source line of its last piece,
@@ -71,8 +73,10 @@ struct Summary {
   double max_path_accel_mm_s2 = 0;        // max |Δv|/Δt (resultant, incl. normal at arcs/corners)
   std::array<double, kMaxAxes> max_axis_speed_mm_min{};
   std::array<double, kMaxAxes> max_axis_accel_mm_s2{};  // max |Δ²p|/Δt² per axis
-  double max_contour_error_mm = 0;  // servo set-point to programmed path (see summary.cpp)
-  double max_servo_lag_mm = 0;      // servo set-point to the same cycle's on-path point
+  // Servo set-point to the path as programmed (lines, arcs as arcs; not the merged or rounded
+  // path the kernel ran), see summary.cpp.
+  double max_contour_error_mm = 0;
+  double max_servo_lag_mm = 0;  // servo set-point to the same cycle's on-path point
   // Direction feed correction (spec 03): range of the coefficient C over the run (NaN: not
   // active), and the cycle time of the same program without it (a second run; NaN: not run).
   double correction_min = std::numeric_limits<double>::quiet_NaN();
@@ -82,8 +86,10 @@ struct Summary {
   std::string accdec;  // look-ahead acc/dec type ("acceleration", "moving_average"); "" = n/a
   sim::OperatorModes operator_modes;  // dry run, single-block stop (as the run had them)
   std::vector<std::string> warnings;
-  std::vector<SlowSpot> slowest;                      // worst first, at most 5
-  std::vector<AuxEvent> aux_events;                   // the first kMaxAuxEvents, in order
+  std::vector<SlowSpot> slowest;     // worst first, at most 5
+  double time_lost_s = 0;            // Σ lost_s over every block of the run (not only the slowest)
+  std::uint64_t blocks_timed = 0;    // motion block executions given a share of the cycles' time
+  std::vector<AuxEvent> aux_events;  // the first kMaxAuxEvents, in order
   std::uint64_t aux_event_count = 0;                  // all of them
   static constexpr std::size_t kMaxAuxEvents = 1000;  // bounded: memory flat in program length
   LoadSummary load;
@@ -119,9 +125,23 @@ class SummaryObserver : public sim::SampleObserver {
     double feed_mm_min;  // programmed, clamped to the machine's limit
     double cap_mm_min;   // the limit itself (max feed, or rapid rate for G0)
     bool rapid;
+    bool motion;              // a motion block (else a dwell: no geometry)
+    bool timed;               // given a share of some cycle's time already
     std::uint32_t last_line;  // Block::last_line
+    ProgrammedMove move;      // as programmed
   };
-  const Pending* current_block(std::uint32_t line);
+  // A programmed move the tool has passed, and when (the contour error's window).
+  struct Passed {
+    ProgrammedMove move;
+    double t_s;
+  };
+  static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  std::size_t match(std::uint32_t line) const;
+  void share(const motion::Sample& s, std::size_t j, double dt_s, double len_mm);
+  void credit(Pending& b, double dt_s, double len_mm, double override_pct);
+  void pass(std::size_t j, double t_s);
+  double programmed_distance(Vec3 pos, std::size_t j, double t_s) const;
+  double path_ring_distance(Vec3 pos, double lag_mm);
   void close_group();
   template <std::size_t N>
   void sample(const motion::Sample& s);  // on_sample with axes N… disabled
@@ -131,9 +151,16 @@ class SummaryObserver : public sim::SampleObserver {
 
   MachineConfig machine_;
   Summary summary_;
-  // Programmed feed of the blocks handed to the kernel and not yet executed (bounded by the
-  // kernel's buffer capacity).
+  // The programmed blocks handed to the kernel and not yet passed (the pieces of merged lines
+  // too: bounded by the kernel's buffer and its ring of pieces).
   GrowingFifo<Pending> pending_;
+  std::size_t pending_max_;
+  // The programmed moves passed in the last window_s_ (at most kRecent).
+  static constexpr std::size_t kRecent = 1024;
+  std::vector<Passed> recent_;
+  std::size_t recent_next_ = 0, recent_size_ = 0;
+  double window_s_ = 0;
+  Vec3 prev_path_;          // the previous sample's on-path point
   FiniteDifferences diff_;  // velocities and accelerations of the set-points
   // Tangential acceleration: the previous sample's speed along the path (see on_sample).
   double prev_speed_t_ = 0;

@@ -10,6 +10,7 @@
 
 #include "motion/accel_limited.hpp"
 #include "motion/moving_average.hpp"
+#include "motion/piece_lines.hpp"
 #include "motion/search_accdec.hpp"
 #include "planner/buffer.hpp"
 #include "planner/segment.hpp"
@@ -96,7 +97,9 @@ struct Kernel::Impl {
         al(dynamic_cast<AccelLimitedAccDec*>(acc_owner.get())),
         barriers(buf.capacity()),
         events(buf.capacity()),
-        post_ring(lim.post_filter() ? lim.post_cycles : 1) {
+        post_ring(lim.post_filter() ? lim.post_cycles : 1),
+        // Merged lines come only when the block source merges (sim::make_line_merger).
+        pieces(m.merge_tolerance_mm > 0 && o.mode != Mode::kStop ? PieceLines::kCapacity : 0) {
     for (std::size_t i = 0; i < kMaxAxes; ++i) last_end[i] = m.start_position[i];
     position = last_end;
     path_position = last_end;
@@ -118,7 +121,7 @@ struct Kernel::Impl {
   // path. The producer asks before every push, so the buffer is the same when step() runs.
   bool wants_block() {
     retire();
-    return buf.size() + 3 <= buf.capacity();
+    return buf.size() + 3 <= buf.capacity() && !pieces.full();
   }
 
   void pop_event() {
@@ -142,6 +145,10 @@ struct Kernel::Impl {
   }
 
   void push(const Block& b) {
+    if (b.piece) {  // a programmed piece of the merged line before it: its line, not planned
+      pieces.on_piece(b);
+      return;
+    }
     Segment ev;
     ev.start = last_end;
     ev.end = last_end;
@@ -184,6 +191,7 @@ struct Kernel::Impl {
       }
       any_fixed = any_fixed || seg.override_fixed;
       const std::uint64_t idx = buf.push(seg);
+      if (b.pieces > 0) pieces.on_line(b, idx, seg.s0_mm);
       // A chain of segments shorter than a step: the turn within one step before the joint
       // (planner/turn_window.hpp) may hold the passing speed lower than the corner alone.
       const bool chained = joint && vg > 0;
@@ -354,12 +362,12 @@ struct Kernel::Impl {
     out.aux_p = 0;
   }
 
-  // cur: the item under the tool (nullptr: none); pos, path: this cycle's position and
+  // line: the source line under the tool (0: none); pos, path: this cycle's position and
   // path_position.
-  void fill(Sample& out, const Segment* cur, const AxisVec& pos, const AxisVec& path,
+  void fill(Sample& out, std::uint32_t line, const AxisVec& pos, const AxisVec& path,
             double speed_pc) const {
     out.t_s = static_cast<double>(cycle) * lim.period_s;
-    out.line = cur == nullptr ? 0 : cur->line;
+    out.line = line;
     out.position = pos;
     out.path_position = path;
     out.feed_mm_min = speed_pc / lim.period_s * 60.0;
@@ -405,7 +413,8 @@ struct Kernel::Impl {
     if (!started) {
       started = true;
       out = Sample{};
-      fill(out, current(), position, path_position, 0);
+      const Segment* cur = current();
+      fill(out, cur == nullptr ? 0 : cur->line, position, path_position, 0);
       return true;
     }
     if (all_done_with(a)) return false;
@@ -428,7 +437,12 @@ struct Kernel::Impl {
     const AxisVec pos = post_filter(path);
     // Once the program has ended the producer stops asking wants_block(): retire here then.
     if (ended) retire_with(a);
-    fill(out, cur, pos, path, a.tool_speed_pc());
+    // The line under the tool: on a merged line, its programmed piece's.
+    std::uint32_t line = 0;
+    if (cur != nullptr) {
+      line = cur->kind == ItemKind::kMotion ? pieces.line_at(out_idx, tool, cur->line) : cur->line;
+    }
+    fill(out, line, pos, path, a.tool_speed_pc());
     return true;
   }
 
@@ -474,6 +488,7 @@ struct Kernel::Impl {
   std::size_t post_pos = 0;
   AxisVec post_sum;
   std::uint32_t post_still = UINT32_MAX / 2;  // settled at start
+  PieceLines pieces;  // the programmed pieces of the merged lines in the buffer
 };
 
 Kernel::Kernel(const MachineConfig& machine, const KernelOptions& options)

@@ -105,6 +105,7 @@ void LineMerger::put(const Block& block) {
   if (pending_ && extends(block, cone)) {
     cone_ = cone;
     ++pieces_;
+    pieces_of_line_.push_back(Piece::of(block));
     feed_hi_mm_min_ = std::max(feed_hi_mm_min_, block.feed_mm_min);
     if (block.feed_mm_min < line_.feed_mm_min) {
       line_.feed_mm_min = block.feed_mm_min;
@@ -124,6 +125,8 @@ void LineMerger::put(const Block& block) {
     line_.first_piece_dir = last_dir_;  // (kept only if a piece joins, finish())
     cone_ = Cone{};
     pieces_ = 1;
+    pieces_of_line_.clear();
+    pieces_of_line_.push_back(Piece::of(block));
     feed_hi_mm_min_ = block.feed_mm_min;
     pending_ = true;
   } else {
@@ -133,16 +136,48 @@ void LineMerger::put(const Block& block) {
 
 void LineMerger::finish() {
   if (!pending_) return;
-  if (pieces_ == 1) line_.first_piece_dir = line_.last_piece_dir = Vec3{};  // as programmed
-  emit(line_);
   pending_ = false;
+  if (pieces_ == 1) {
+    line_.first_piece_dir = line_.last_piece_dir = Vec3{};  // as programmed
+    emit(line_);
+    return;
+  }
+  line_.pieces = static_cast<std::uint32_t>(pieces_);
+  emit(line_);
+  // put() runs only once everything handed out before has been taken (the pieces of the
+  // previous line too): the vectors swap, no copy.
+  out_pieces_.swap(pieces_of_line_);
+  out_piece_ = 0;
 }
 
 bool LineMerger::next(Block& out) {
+  // A merged line's pieces right after it (it is at the head of out_ when finish() emits it).
+  if (out_piece_ < out_pieces_.size() && out_line_.pieces > 0) {
+    const Piece& p = out_pieces_[out_piece_];
+    const Vec3 start = out_piece_ == 0 ? out_line_.start.xyz() : out_pieces_[out_piece_ - 1].end;
+    out = out_line_;
+    out.line = p.line;
+    out.col = p.col;
+    out.last_line = 0;
+    out.pieces = 0;
+    out.piece = true;
+    out.first_piece_dir = out.last_piece_dir = Vec3{};
+    out.start.set_xyz(start);
+    out.end.set_xyz(p.end);
+    out.feed_mm_min = p.feed_mm_min;
+    out.correction = p.correction;
+    out.path_mode = p.path_mode;
+    if (++out_piece_ == out_pieces_.size()) out_line_.pieces = 0;
+    return true;
+  }
   if (out_size_ == 0) return false;
   out = out_[out_head_];
   out_head_ = (out_head_ + 1) % out_.size();
   --out_size_;
+  if (out.pieces > 0) {
+    out_line_ = out;
+    out_piece_ = 0;
+  }
   return true;
 }
 

@@ -24,6 +24,12 @@
 // directions: the corners at its ends are the pieces' corners, which may turn more than the chord's
 // (planner::joint_speed_pc keeps both).
 //
+// The pieces themselves follow their merged line out of the stage (Block::pieces on the line,
+// Block::piece on each piece, in program order): the planner plans the line only, while the
+// kernel names the piece under the tool in each sample's line and the observers measure the
+// samples against the path as programmed. A line's pieces are held here until it is complete
+// (at most kMaxPiecesShort, a few MB at most, independent of the program's length).
+//
 // On by default ([motion] merge_tolerance_mm = 0.0005; 0 turns it off; off in stop mode): the
 // random 2 000-segment program cut into 100× pieces runs in the time of the original (85.89 s
 // against 89.12 s unmerged; original 85.90 s), and every corpus program keeps P1–P4.
@@ -33,6 +39,8 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "core/block.hpp"
 
@@ -55,7 +63,8 @@ class LineMerger {
   void put(const Block& block);
   // The program ends (or stops on an error): the line being merged goes out.
   void finish();
-  // The blocks ready, in program order.
+  // The blocks ready, in program order: a merged line (Block::pieces > 0) is followed by its
+  // pieces (Block::piece), which the planner skips.
   bool next(Block& out);
 
   // A line takes at most kMaxPieces pieces, or kMaxPiecesShort while it is shorter than
@@ -97,6 +106,16 @@ class LineMerger {
   static bool within(const Angle& x, const Angle& y);  // x ≤ y (see line_merge.cpp)
   bool extends(const Block& b, Cone& cone) const;
   void emit(const Block& b);
+  // What a piece adds to its line: the rest is the line's (kind, G64 tolerance, override mode).
+  struct Piece {
+    std::uint32_t line, col;
+    Vec3 end;
+    double feed_mm_min, correction;
+    PathMode path_mode;
+    static Piece of(const Block& b) {
+      return {b.line, b.col, b.end.xyz(), b.feed_mm_min, b.correction, b.path_mode};
+    }
+  };
 
   double tolerance_mm_;
   double min_cos_;  // cos of the largest turn at a merged joint
@@ -108,6 +127,11 @@ class LineMerger {
   double feed_hi_mm_min_ = 0;   // the highest feed of its pieces (line_ has the lowest)
   std::array<Block, 2> out_{};  // ready: at most the line and the block after
   std::size_t out_head_ = 0, out_size_ = 0;
+  std::vector<Piece> pieces_of_line_;  // the pieces of line_
+  // The pieces of the last merged line handed out, handed out after it (next()).
+  std::vector<Piece> out_pieces_;
+  std::size_t out_piece_ = 0;  // the next of out_pieces_ to hand out
+  Block out_line_;             // the line they belong to
 };
 
 }  // namespace cncore::planner

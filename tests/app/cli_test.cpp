@@ -333,6 +333,28 @@ TEST_F(Cli, BadProgramIsExitOneWithFileLineColumn) {
   }
 }
 
+TEST_F(Cli, CheckReportsATravelErrorOnceWithoutKnockOnErrors) {
+  // Line 5 leaves the travel (Y 0 … 200 on the built-in mill); the arcs after it are written
+  // from its end point and the program comes back inside on line 8; line 10 is an error of its
+  // own (an arc whose end is not on its circle).
+  write_file(dir_ / "travel.ngc",
+             "G21 G90 G17\nG0 X10 Y10\nF1000\nG1 X20 Y10\nG1 Y320\nG2 X30 Y320 I5 J0\n"
+             "G3 X40 Y320 I5 J0\nG1 X50 Y50\nG2 X60 Y50 I5 J0\nG2 X70 Y50 I3 J0\nM2\n");
+  const Result r = run("check travel.ngc");
+  EXPECT_EQ(r.code, 1) << r.err;
+  std::vector<std::string> lines;
+  std::istringstream err(r.err);
+  for (std::string l; std::getline(err, l);) lines.push_back(l);
+  ASSERT_EQ(lines.size(), 3u) << r.err;
+  EXPECT_EQ(lines[0].rfind("travel.ngc:5:", 0), 0u) << r.err;
+  EXPECT_NE(lines[0].find("error: Y 320.000 is beyond the travel limit 200.000"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(lines[1].rfind("travel.ngc:5:", 0), 0u) << r.err;
+  EXPECT_NE(lines[1].find(": note: "), std::string::npos) << r.err;
+  EXPECT_EQ(lines[2].rfind("travel.ngc:10:", 0), 0u) << r.err;
+  EXPECT_NE(lines[2].find("radius to the end"), std::string::npos) << r.err;
+}
+
 TEST_F(Cli, CheckReportsEveryErrorWithItsLine) {
   // Errors on lines 2 (unknown word), 4 (two motion words) and 6 (division by zero, at the /).
   write_file(dir_ / "many.ngc", "G21 G90 G1 F1000\nX10 E5\nX20\nG0 G1 X30\nX40\nX[1/0]\nM30\n");

@@ -32,15 +32,27 @@ Vec3 rounded(Vec3 p, double q) {
   return {std::round(p.x / q) * q, std::round(p.y / q) * q, std::round(p.z / q) * q};
 }
 
-std::vector<Block> run(LineMerger& m, const std::vector<Block>& in) {
+// What the planner takes (the pieces that follow a merged line are left out); `pieces`, if
+// given, gets those.
+std::vector<Block> run(LineMerger& m, const std::vector<Block>& in,
+                       std::vector<Block>* pieces = nullptr) {
   std::vector<Block> out;
   Block b;
+  auto take = [&] {
+    while (m.next(b)) {
+      if (!b.piece) {
+        out.push_back(b);
+      } else if (pieces != nullptr) {
+        pieces->push_back(b);
+      }
+    }
+  };
   for (const Block& x : in) {
     m.put(x);
-    while (m.next(b)) out.push_back(b);
+    take();
   }
   m.finish();
-  while (m.next(b)) out.push_back(b);
+  take();
   return out;
 }
 

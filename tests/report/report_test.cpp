@@ -222,30 +222,28 @@ TEST(ReportHtml, OneMillionSamplesGiveABoundedPageFast) {
   EXPECT_NE(html.find("<code>G1 X100000 F6000</code>"), std::string::npos);
 }
 
-TEST(ReportHtml, MergedPiecesAreNamedByTheirRangeOfLines) {
+TEST(ReportHtml, MergedPiecesAreNamedByTheirOwnLines) {
   // 1 mm along X in 10 pieces (lines 2–11) that the planner merges into one line, then a 90°
-  // corner (its own line): the slow spots are "2–11" and "12", each with its first line's text.
+  // corner (its own line): the slow spots are the program's own lines, the pieces one by one.
   std::string prog = "G21 G90 F3000\n";
   for (int i = 1; i <= 10; ++i) prog += fmt::format("G1 X{:.1f}\n", 0.1 * i);
   prog += "G1 Y1\nM2\n";
   const fs::path path = write_program("merged.ngc", prog);
   const auto r = run(path);
   const std::vector<ReportSlowSpot> slow = r->report.slowest();
-  ASSERT_EQ(slow.size(), 2u);
+  ASSERT_GE(slow.size(), 3u);
+  bool corner = false;
   for (const ReportSlowSpot& s : slow) {
-    if (s.line == 2) {
-      EXPECT_EQ(s.last_line, 11u);
-    } else {
-      EXPECT_EQ(s.line, 12u);
-      EXPECT_EQ(s.last_line, 0u);
-    }
+    EXPECT_GE(s.line, 2u);
+    EXPECT_LE(s.line, 12u);
+    EXPECT_EQ(s.last_line, 0u);
+    corner = corner || s.line == 12;
   }
+  EXPECT_TRUE(corner);
   const std::string html = render_report_html(r->report, r->summary.summary(),
                                               default_machine_config(), {path.string(), ""});
-  EXPECT_NE(html.find("<td class=\"num\">2–11</td><td><code>G1 X0.1</code> … (collinear lines "
-                      "run as one, through line 11)</td>"),
-            std::string::npos);
   EXPECT_NE(html.find("<td class=\"num\">12</td><td><code>G1 Y1</code></td>"), std::string::npos);
+  EXPECT_EQ(html.find("collinear lines run as one"), std::string::npos);
 }
 
 TEST(ReportHtml, ProgramTextIsEscaped) {
