@@ -58,8 +58,10 @@ double SimAxes::step(const AxisVec& commanded) {
   double worst = 0;
   for (std::size_t i = 0; i < kMaxAxes; ++i) {
     if (!machine_.axes[i].enabled) continue;
+    // The loop acts on the error at the start of the period; the feed-forward on the period's
+    // commanded motion (ff = 1 and no error: actual = commanded exactly).
     const double v_cmd = (commanded[i] - last_cmd_[i]) / tau;
-    const double v = s.feedforward * v_cmd + s.kp_per_s * (commanded[i] - actual_[i]);
+    const double v = s.feedforward * v_cmd + s.kp_per_s * (last_cmd_[i] - actual_[i]);
     actual_[i] += v * tau;
     worst = std::max(worst, std::abs(commanded[i] - actual_[i]));
   }

@@ -46,8 +46,8 @@ struct ShmRingHeader {
   std::uint64_t write_count = 0;  // accessed through std::atomic_ref
 };
 
-// The simulated axes: per axis, velocity = ff·(commanded velocity) + kp·(commanded − actual),
-// integrated every period. Switches sit at each axis's travel maximum in the axes' true
+// The simulated axes: per axis, velocity = ff·(commanded velocity over the period) + kp·(the
+// error at its start), integrated every period. Switches sit at each axis's travel maximum in the axes' true
 // position, which differs from the controller's by `position_error` until homing finds it.
 class SimAxes {
  public:
