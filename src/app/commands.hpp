@@ -63,6 +63,14 @@ struct LatencyArgs {
 
 int command_latency(const LatencyArgs& a);
 
+struct EstimateArgs {
+  std::vector<std::string> files;  // programs, or folders of programs
+  unsigned jobs = 0;               // -j: worker processes; 0: the number of cores
+  std::string machine, csv, report;
+};
+
+int command_estimate(const EstimateArgs& a);
+
 // Prints the configuration (the built-in one for an empty path) as TOML.
 int command_machine(const std::string& machine_path);
 

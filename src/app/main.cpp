@@ -193,6 +193,24 @@ int main_cli(int argc, char** argv) {
       ->type_name("FILE.ngc");
   latency->add_option("--machine", la.machine, "Machine configuration")->type_name("FILE.toml");
 
+  EstimateArgs ea;
+  CLI::App* estimate = app.add_subcommand(
+      "estimate", "Cycle time of every program of a batch, each run in its own process.");
+  estimate
+      ->add_option("FILES", ea.files, "Part programs, or folders of them (.ngc .nc .gcode .tap)")
+      ->required()
+      ->type_name("FILE.ngc|DIR");
+  estimate->add_option("-j,--jobs", ea.jobs, "Parallel worker processes (default: the cores)")
+      ->check(CLI::Range(1U, 1024U))
+      ->type_name("N");
+  estimate->add_option("--machine", ea.machine, "Machine configuration (TOML); default: built-in")
+      ->type_name("FILE.toml");
+  estimate->add_option("--csv", ea.csv, "Write one row per program")
+      ->required()
+      ->type_name("FILE.csv");
+  estimate->add_option("--report", ea.report, "Write one HTML page ranking the programs")
+      ->type_name("FILE.html");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -204,6 +222,7 @@ int main_cli(int argc, char** argv) {
   if (*machine) return command_machine(machine_path);
   if (*serve) return command_serve(sa);
   if (*latency) return command_latency(la);
+  if (*estimate) return command_estimate(ea);
   return 2;
 }
 
