@@ -181,6 +181,8 @@ int main_cli(int argc, char** argv) {
   serve->add_option("--grbl-pty", sa.grbl_pty, "Grbl 1.1 protocol on a pseudo-terminal")
       ->type_name("PATH");
   serve->add_option("--http", sa.http, "Operator web page")->type_name("ADDR");
+  serve->add_option("--mtconnect", sa.mtconnect, "MTConnect SHDR adapter (read-only telemetry)")
+      ->type_name("HOST:PORT");
 
   LatencyArgs la;
   CLI::App* latency = app.add_subcommand(
