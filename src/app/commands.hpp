@@ -52,6 +52,7 @@ int command_table(const TableArgs& a);
 struct ServeArgs {
   std::string machine, servo = "sim", state_dir, program, trajectory;
   std::string grbl_tcp, grbl_pty, http;  // front ends that plug into the control interface
+  std::string mtconnect;                 // --mtconnect HOST:PORT: MTConnect SHDR adapter
   bool start = false, no_state = false, no_realtime = false;
 };
 
@@ -64,6 +65,14 @@ struct LatencyArgs {
 };
 
 int command_latency(const LatencyArgs& a);
+
+struct EstimateArgs {
+  std::vector<std::string> files;  // programs, or folders of programs
+  unsigned jobs = 0;               // -j: worker processes; 0: the number of cores
+  std::string machine, csv, report;
+};
+
+int command_estimate(const EstimateArgs& a);
 
 // Prints the configuration (the built-in one for an empty path) as TOML.
 int command_machine(const std::string& machine_path);

@@ -246,6 +246,8 @@ int main_cli(int argc, char** argv) {
   serve->add_option("--grbl-pty", sa.grbl_pty, "Grbl 1.1 protocol on a pseudo-terminal")
       ->type_name("PATH");
   serve->add_option("--http", sa.http, "Operator web page")->type_name("ADDR");
+  serve->add_option("--mtconnect", sa.mtconnect, "MTConnect SHDR adapter (read-only telemetry)")
+      ->type_name("HOST:PORT");
 
   LatencyArgs la;
   CLI::App* latency = app.add_subcommand(
@@ -257,6 +259,24 @@ int main_cli(int argc, char** argv) {
   latency->add_option("--program", la.program, "Program run in the loaded phase")
       ->type_name("FILE.ngc");
   latency->add_option("--machine", la.machine, "Machine configuration")->type_name("FILE.toml");
+
+  EstimateArgs ea;
+  CLI::App* estimate = app.add_subcommand(
+      "estimate", "Cycle time of every program of a batch, each run in its own process.");
+  estimate
+      ->add_option("FILES", ea.files, "Part programs, or folders of them (.ngc .nc .gcode .tap)")
+      ->required()
+      ->type_name("FILE.ngc|DIR");
+  estimate->add_option("-j,--jobs", ea.jobs, "Parallel worker processes (default: the cores)")
+      ->check(CLI::Range(1U, 1024U))
+      ->type_name("N");
+  estimate->add_option("--machine", ea.machine, "Machine configuration (TOML); default: built-in")
+      ->type_name("FILE.toml");
+  estimate->add_option("--csv", ea.csv, "Write one row per program")
+      ->required()
+      ->type_name("FILE.csv");
+  estimate->add_option("--report", ea.report, "Write one HTML page ranking the programs")
+      ->type_name("FILE.html");
 
   try {
     std::vector<std::string> args = with_bare_progress_on(argc, argv);
@@ -276,6 +296,7 @@ int main_cli(int argc, char** argv) {
   if (*machine) return command_machine(machine_path);
   if (*serve) return command_serve(sa);
   if (*latency) return command_latency(la);
+  if (*estimate) return command_estimate(ea);
   return 2;
 }
 

@@ -6,6 +6,7 @@
 #include <csignal>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "io/trajectory_csv.hpp"
 #include "runtime/control.hpp"
 #include "runtime/persist.hpp"
+#include "telemetry/telemetry.hpp"
 
 namespace cncore::app {
 
@@ -121,6 +123,17 @@ int command_serve(const ServeArgs& a) {
   std::unique_ptr<TrajectoryRecorder> recorder;
   if (!a.trajectory.empty()) {
     recorder = std::make_unique<TrajectoryRecorder>(controller, a.trajectory);
+  }
+  // Telemetry reads the controller only; destroyed before it.
+  std::optional<telemetry::ShdrAdapter> shdr;
+  if (!a.mtconnect.empty()) {
+    try {
+      shdr.emplace(controller, telemetry::ShdrOptions{a.mtconnect});
+    } catch (const std::runtime_error& e) {
+      throw UsageError(e.what());
+    }
+    shdr->set_program(a.program);
+    std::cout << "mtconnect SHDR on port " << shdr->port() << "\n";
   }
   std::cout << "cncore serve: " << machine.name << ", period " << machine.period_s * 1000
             << " ms, servo " << a.servo << "; commands on stdin\n";
