@@ -76,9 +76,11 @@ CodeInfo g_code_info(int code10) {
     case 421:
       return no(GGroup::kCutterComp, "cutter compensation");
     case 430:
+      return ok(GGroup::kToolLength, "tool length offset");
     case 431:
+      return ok(GGroup::kToolLength, "dynamic tool length offset");
     case 432:
-      return no(GGroup::kToolLength, "tool length offset");
+      return ok(GGroup::kToolLength, "added tool length offset");
     case 490:
       return ok(GGroup::kToolLength, "tool length offset off");
     case 530:
@@ -173,7 +175,7 @@ CodeInfo m_code_info(int code10) {
     case 60:
       return okm(MGroup::kToolChange, "tool change");
     case 610:
-      return {true, false, static_cast<int>(MGroup::kToolChange), "set tool number"};
+      return okm(MGroup::kToolChange, "set tool number");
     case 70:
     case 80:
       return okm(MGroup::kCoolant, "coolant on");

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "config/machine_config.hpp"
+#include "config/tool_table.hpp"
 #include "core/block.hpp"
 
 namespace cncore::interp {
@@ -17,6 +18,7 @@ namespace cncore::interp {
 struct Options {
   std::map<int, double> params;                // --param N=V: numbered parameters #N
   std::map<std::string, double> named_params;  // --var NAME=V: named parameters #<NAME>
+  ToolTable tools;  // --tool-table FILE: replaces the machine's [[tools]] entries it lists
 };
 
 class Interpreter {

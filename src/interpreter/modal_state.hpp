@@ -22,9 +22,10 @@ struct ModalState {
   PathMode path_mode = PathMode::kBlend;  // group 13: G64
   double tolerance_mm = -1;               // G64 P (mm); < 0: none given
 
-  double feed_mm_min = 0;  // F, converted to mm/min when it is read
-  bool feed_set = false;   // an F word has been seen
-  int tool = 0;            // T of the last M6 (tool in the spindle)
+  double feed_mm_min = 0;      // F, converted to mm/min when it is read
+  bool feed_set = false;       // an F word has been seen
+  int tool = 0;                // T of the last M6 (tool in the spindle)
+  int tool_length_code = 490;  // group 8: G49 (430 G43, 431 G43.1, 432 G43.2)
 
   double length_unit_mm() const { return inch ? 25.4 : 1.0; }
 };
