@@ -106,16 +106,18 @@ CodeInfo g_code_info(int code10) {
     case 720:
       return no(GGroup::kMotion, "lathe finishing cycles");
     case 730:
-    case 760:
+    case 740:
     case 810:
     case 820:
     case 830:
     case 840:
     case 850:
     case 860:
-    case 870:
     case 880:
     case 890:
+      return ok(GGroup::kMotion, "canned cycle");
+    case 760:
+    case 870:
       return no(GGroup::kMotion, "canned cycle");
     case 800:
       return ok(GGroup::kMotion, "cancel motion mode");

@@ -13,9 +13,8 @@
 
 namespace cncore::interp {
 
-Interpreter::Impl::Impl(LineReader r, std::string name, const MachineConfig& m,
-                        const Options& options)
-    : file_(std::move(name)), machine_(m), reader_(std::move(r)) {
+Interpreter::Impl::Impl(LineReader r, std::string name, MachineConfig m, const Options& options)
+    : file_(std::move(name)), machine_(std::move(m)), reader_(std::move(r)) {
   ctx_.file = &file_;
   params_.set_live(this);
   for (std::size_t a = 0; a < kMaxAxes; ++a) pos_[a] = machine_.start_position[a];
@@ -397,7 +396,8 @@ void Interpreter::Impl::execute_words() {
   // 21 distance mode, 22 arc distance mode
   if (const auto* g = w.group(GGroup::kDistance)) modal_.absolute = g->code10 == 900;
   if (const auto* g = w.group(GGroup::kArcDistance)) modal_.arc_absolute = g->code10 == 901;
-  // 23 G98/G99: retract modes of canned cycles, which cncore does not run.
+  // 23 G98/G99: the canned cycles' retract mode
+  if (const auto* g = w.group(GGroup::kCannedReturn)) modal_.retract_to_r = g->code10 == 990;
 
   // Which words are axis words, and who uses them.
   bool have_axes = false;
@@ -444,16 +444,21 @@ void Interpreter::Impl::execute_words() {
       case 30:
         modal_.motion = Motion::kArcCcw;
         break;
-      default:
+      case 800:
         modal_.motion = Motion::kNone;
-        break;  // G80
+        break;
+      default:
+        modal_.motion = Motion::kCycle;
+        modal_.cycle = motion_word->code10;
+        break;
     }
   }
   const bool arc_mode = modal_.motion == Motion::kArcCw || modal_.motion == Motion::kArcCcw;
   const bool have_centre = w.has('i') || w.has('j') || w.has('k');
+  const bool cycle_mode = modal_.motion == Motion::kCycle;
   if (!arc_mode) {
     for (char c : {'i', 'j', 'k', 'r'}) {
-      if (w.has(c) && !(c == 'r' && nm == 100)) {
+      if (w.has(c) && !(c == 'r' && (nm == 100 || cycle_mode))) {
         fail(w[c].col, fmt::format("{} word without G2/G3", static_cast<char>(c - 'a' + 'A')));
       }
     }
@@ -470,13 +475,16 @@ void Interpreter::Impl::execute_words() {
       }
       if (!modal_.absolute) fail(nonmodal->col, "G53 cannot be used in incremental mode G91");
     }
-    if (have_axes || (arc_mode && (have_centre || w.has('r')))) {
+    const bool cycle_words = cycle_mode && (w.has('r') || motion_word != nullptr);
+    if (have_axes || (arc_mode && (have_centre || w.has('r'))) || cycle_words) {
       if (modal_.motion == Motion::kNone) {
         fail(have_axes ? first_axis_col : w.first_col,
              "axis words without a motion mode: program G0, G1, G2 or G3 first");
       }
-      const AxisVec target = target_from_words(machine_coords);
-      if (arc_mode) {
+      if (cycle_mode) {
+        if (machine_coords) fail(nonmodal->col, "G53 with a canned cycle");
+        canned_cycle(motion_word != nullptr ? motion_word->col : col);
+      } else if (const AxisVec target = target_from_words(machine_coords); arc_mode) {
         arc(target, modal_.motion == Motion::kArcCcw, col);
       } else {
         line_motion(target, col);
@@ -528,6 +536,10 @@ bool Interpreter::next(Block& out) {
 
 bool Interpreter::recover() {
   return impl_->recover();
+}
+
+CanonFrame Interpreter::canon_frame() const {
+  return {impl_->modal_.length_unit_mm(), impl_->tool_offset_};
 }
 
 }  // namespace cncore::interp

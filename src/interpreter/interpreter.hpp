@@ -21,6 +21,13 @@ struct Options {
   ToolTable tools;  // --tool-table FILE: replaces the machine's [[tools]] entries it lists
 };
 
+// What LinuxCNC's canonical positions leave out of a block's machine coordinates: the program
+// units and the tool length offset in force when the block was made.
+struct CanonFrame {
+  double unit_mm = 1;  // 25.4 in G20
+  AxisVec tool_offset_mm;
+};
+
 class Interpreter {
  public:
   // Opens the program file. Throws InputError if it cannot be read.
@@ -43,9 +50,22 @@ class Interpreter {
   // be consequences of the first (the failing line's modal changes may be half applied).
   bool recover();
 
+  // The frame of the block next() handed out last (for CanonPrinter).
+  CanonFrame canon_frame() const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+};
+
+// `cncore check --canon`: LinuxCNC's canonical-machine calls (STRAIGHT_TRAVERSE, STRAIGHT_FEED,
+// ARC_FEED, SET_FEED_RATE, DWELL), one per line, for each block in turn.
+class CanonPrinter {
+ public:
+  std::string print(const Block& block, const CanonFrame& frame);
+
+ private:
+  double last_feed_ = -1;
 };
 
 // One line of `cncore check --blocks` for a block (stable text format used by golden tests,

@@ -169,7 +169,7 @@ struct Loop {
 };
 
 struct Interpreter::Impl final : LiveParameters {
-  Impl(LineReader r, std::string name, const MachineConfig& m, const Options& options);
+  Impl(LineReader r, std::string name, MachineConfig m, const Options& options);
 
   bool next(Block& out);
   bool recover();
@@ -196,6 +196,12 @@ struct Interpreter::Impl final : LiveParameters {
   [[noreturn]] void fail(std::uint32_t col, const std::string& message) const {
     ctx_.fail(col, message);
   }
+
+  // canned_cycles.cpp
+  void canned_cycle(std::uint32_t col);
+  void cycle_move(bool rapid, const AxisVec& target, std::uint32_t col);
+  void cycle_body(std::size_t drill_axis, double r_mm, double bottom_mm, double clear_mm,
+                  std::uint32_t col);
 
   // tool_offsets.cpp
   void init_tools(const Options& options);

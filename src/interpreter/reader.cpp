@@ -92,14 +92,13 @@ bool LineReader::next_line(std::string_view& line) {
     if (buf_pos_ >= buf_.size() && !fill()) break;
     const char* begin = buf_.data() + buf_pos_;
     const std::size_t avail = buf_.size() - buf_pos_;
-    const void* nl_ptr = std::memchr(begin, '\n', avail);
-    std::size_t len = nl_ptr != nullptr
-                          ? static_cast<std::size_t>(static_cast<const char*>(nl_ptr) - begin)
-                          : avail;
-    bool found = nl_ptr != nullptr;
+    const std::string_view chunk(begin, avail);
+    const std::size_t nl = chunk.find('\n');
+    bool found = nl != std::string_view::npos;
+    std::size_t len = found ? nl : avail;
     bool cr = false;
-    if (const void* cr_ptr = std::memchr(begin, '\r', len); cr_ptr != nullptr) {
-      len = static_cast<std::size_t>(static_cast<const char*>(cr_ptr) - begin);
+    if (const std::size_t at = chunk.substr(0, len).find('\r'); at != std::string_view::npos) {
+      len = at;
       found = cr = true;
     }
     have_any = true;
