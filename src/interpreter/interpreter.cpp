@@ -120,7 +120,11 @@ void Interpreter::Impl::step() {
 void Interpreter::Impl::exponent_or_unknown(std::size_t pos, std::size_t value_start,
                                             char last_letter) const {
   const std::string& t = line_.text;
-  const bool after_number = pos > value_start && (is_digit(t[pos - 1]) || t[pos - 1] == '.');
+  // Written together, as in "1e400" (not "X10 E5": spaces are gone from the text, not from
+  // the column map).
+  const bool after_number = pos > value_start && (is_digit(t[pos - 1]) || t[pos - 1] == '.') &&
+                            line_.col(pos) == line_.col(pos - 1) + 1 &&
+                            line_.col(pos + 1) == line_.col(pos) + 1;
   std::size_t e = pos + 1;
   if (e < t.size() && (t[e] == '-' || t[e] == '+')) ++e;
   if (after_number && last_letter != 'g' && last_letter != 'm' && e < t.size() && is_digit(t[e])) {

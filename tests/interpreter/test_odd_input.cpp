@@ -140,6 +140,7 @@ TEST(OddInput, ExponentsAreNamedAsSuch) {
   EXPECT_NE(err.find("no exponent"), std::string::npos) << err;
   EXPECT_NE(error_of("G0 X2.5E-3\n").find("'2.5e-3'"), std::string::npos);
   EXPECT_NE(error_of("G0 E5\n").find("1:4: error: unknown word 'E'"), std::string::npos);
+  EXPECT_NE(error_of("G0 X10 E5\n").find("1:8: error: unknown word 'E'"), std::string::npos);
   // EQ after a number is an operator, not an exponent.
   EXPECT_EQ(motion_of("G0 X[1 EQ 1]\n").at(0).end[kX], 1.0);
 }
