@@ -14,10 +14,11 @@ namespace cncore::app {
 
 int command_check(const CheckArgs& a) {
   const MachineConfig machine = machine_from(a.machine);
-  const interp::Options options = interpreter_options(a.vars, a.params);
+  const interp::Options options = interpreter_options(a.vars, a.params, a.tool_table);
   require_readable(a.program);
   interp::Interpreter interpreter(a.program, machine, options);
   Block b;
+  interp::CanonPrinter canon;
   std::uint64_t blocks = 0, motion = 0;
   std::string out;
   auto flush = [&out] {
@@ -60,18 +61,21 @@ int command_check(const CheckArgs& a) {
     if (is_motion(b)) {
       ++motion;
     }
-    if (a.blocks) {
+    if (a.canon) {
+      out += canon.print(b, interpreter.canon_frame());
+    } else if (a.blocks) {
       out += interp::format_block(b, machine);
       out += '\n';
-      if (out.size() > (1 << 16)) flush();
     }
+    if (out.size() > (1 << 16)) flush();
   }
   if (errors > 0) {
     flush();
     std::fflush(stdout);
     return 1;
   }
-  if (!a.blocks) out = fmt::format("{}: ok, {} blocks ({} motion)\n", a.program, blocks, motion);
+  if (!a.blocks && !a.canon)
+    out = fmt::format("{}: ok, {} blocks ({} motion)\n", a.program, blocks, motion);
   std::fwrite(out.data(), 1, out.size(), stdout);
   std::fflush(stdout);
   return 0;

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 
+#include "config/tool_table.hpp"
 #include "core/error.hpp"
 
 namespace cncore::app {
@@ -52,8 +53,10 @@ std::pair<std::string, double> name_value(const std::string& option, const std::
 }
 
 interp::Options interpreter_options(const std::vector<std::string>& vars,
-                                    const std::vector<std::string>& params) {
+                                    const std::vector<std::string>& params,
+                                    const std::string& tool_table) {
   interp::Options o;
+  if (!tool_table.empty()) o.tools = read_tool_table(tool_table);
   for (const std::string& a : vars) {
     auto [name, value] = name_value("--var", a);
     for (const char c : name) {

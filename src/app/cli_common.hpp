@@ -32,9 +32,10 @@ double override_value(const std::string& option, std::string_view text, double m
 // "NAME=VALUE" with a numeric value, else UsageError naming the option.
 std::pair<std::string, double> name_value(const std::string& option, const std::string& arg);
 
-// --var NAME=V and --param N=V of `run` and `check`.
+// --var NAME=V, --param N=V and --tool-table FILE (empty: none) of `run` and `check`.
 interp::Options interpreter_options(const std::vector<std::string>& vars,
-                                    const std::vector<std::string>& params);
+                                    const std::vector<std::string>& params,
+                                    const std::string& tool_table = {});
 
 // The configuration file, or the built-in machine for an empty path (InputError when bad).
 MachineConfig machine_from(const std::string& path);

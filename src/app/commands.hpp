@@ -15,6 +15,7 @@ struct RunArgs {
   std::string accdec;  // --accdec; empty: the machine's [motion] accdec
   std::optional<double> override_pct;
   std::vector<std::string> override_at, vars, params;
+  std::string tool_table;  // --tool-table FILE.tbl (LinuxCNC format)
   std::string correction;  // --correction on|off; empty: [direction_correction] enabled
   std::string report;      // --report FILE.html
   std::string adaptive;    // --adaptive on|off; empty: adaptive.enabled of the configuration
@@ -30,7 +31,9 @@ int command_run(const RunArgs& a);
 struct CheckArgs {
   std::string program, machine;
   bool blocks = false;
+  bool canon = false;  // --canon: LinuxCNC's canonical-machine calls
   std::vector<std::string> vars, params;
+  std::string tool_table;  // --tool-table FILE.tbl (LinuxCNC format)
 };
 
 int command_check(const CheckArgs& a);

@@ -153,6 +153,10 @@ int main_cli(int argc, char** argv) {
   run->add_option("--param", ra.params, "Numbered parameter #N = VALUE (N=VALUE, repeatable)")
       ->allow_extra_args(false)
       ->type_name("N=V");
+  run->add_option(
+         "--tool-table", ra.tool_table,
+         "Tool table in LinuxCNC's format (T1 P1 Z12.5 D6), mm; replaces [[tools]] entries")
+      ->type_name("FILE.tbl");
 
   CheckArgs ca;
   CLI::App* check = app.add_subcommand("check", "Interpret a program only and report every error.");
@@ -160,6 +164,8 @@ int main_cli(int argc, char** argv) {
       ->required()
       ->type_name("FILE.ngc");
   check->add_flag("--blocks", ca.blocks, "List the interpreted blocks, one per line");
+  check->add_flag("--canon", ca.canon,
+                  "List LinuxCNC's canonical-machine calls (as rs274 -g), in program units");
   check->add_option("--machine", ca.machine, "Machine configuration (TOML); default: built-in")
       ->type_name("FILE.toml");
   check->add_option("--var", ca.vars, "Named parameter #<NAME> = VALUE (NAME=VALUE, repeatable)")
@@ -168,6 +174,11 @@ int main_cli(int argc, char** argv) {
   check->add_option("--param", ca.params, "Numbered parameter #N = VALUE (N=VALUE, repeatable)")
       ->allow_extra_args(false)
       ->type_name("N=V");
+  check
+      ->add_option("--tool-table", ca.tool_table,
+                   "Tool table in LinuxCNC's format (T1 P1 Z12.5 D6), mm; replaces [[tools]] "
+                   "entries")
+      ->type_name("FILE.tbl");
 
   TableArgs ta;
   CLI::App* table = app.add_subcommand(

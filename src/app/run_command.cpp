@@ -111,7 +111,7 @@ int command_run(const RunArgs& a) {
       throw UsageError("the feed override ends at 0 %: the program would never finish");
     }
   }
-  options.interpreter = interpreter_options(a.vars, a.params);
+  options.interpreter = interpreter_options(a.vars, a.params, a.tool_table);
   if (a.dry_run_feed_mm_min) {
     if (!(*a.dry_run_feed_mm_min > 0) || !std::isfinite(*a.dry_run_feed_mm_min))
       throw UsageError("--dry-run: the feed must be a number > 0 (mm/min)");

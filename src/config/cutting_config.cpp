@@ -132,8 +132,11 @@ ToolSpec read_tool(const CutReader& r, const toml::source_region& at, const toml
       corner_at = key.source();
     } else if (k == "flutes") {
       tool.flutes = r.count(key, node, name, 1, 100);
+    } else if (k == "length_mm") {
+      tool.length_mm = r.number(key, node, name);
     } else {
-      r.unknown(key, name, keys_here("number, type, diameter_mm, corner_radius_mm, flutes"));
+      r.unknown(key, name,
+                keys_here("number, type, diameter_mm, corner_radius_mm, flutes, length_mm"));
     }
   }
   if (!have_number) r.fail(at, prefix + "number is required (the T word that selects the tool)");
@@ -288,6 +291,7 @@ std::string cutting_config_to_toml(const CuttingConfig& c) {
     line("diameter_mm = " + num(t.diameter_mm), "mm");
     line("corner_radius_mm = " + num(t.corner_radius_mm), "mm (bull nose; ball = D/2, flat = 0)");
     line("flutes = " + std::to_string(t.flutes), "number of flutes");
+    line("length_mm = " + num(t.length_mm), "tool length offset, mm (G43)");
   }
   return o;
 }

@@ -22,6 +22,7 @@ struct ToolSpec {
   double diameter_mm = 10;
   double corner_radius_mm = 0;  // bull nose only; a ball's is D/2, a flat end mill's 0
   std::uint32_t flutes = 2;
+  double length_mm = 0;  // tool length offset (G43 applies it along Z)
 
   double radius_mm() const { return diameter_mm / 2; }
   // The corner radius the shape implies: 0 (flat), D/2 (ball), corner_radius_mm (bull nose).

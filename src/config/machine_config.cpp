@@ -134,6 +134,9 @@ void read_interpreter(const Reader& r, const toml::table& t, MachineConfig& c) {
     if (k == "max_loop_iterations") {
       c.max_loop_iterations =
           static_cast<std::uint64_t>(r.integer_in(key, node, name, 1, 1000000000000));
+    } else if (k == "max_total_iterations") {
+      c.max_total_iterations =
+          static_cast<std::uint64_t>(r.integer_in(key, node, name, 1, 1000000000000));
     } else if (k == "max_call_depth") {
       c.max_call_depth = static_cast<std::uint32_t>(r.integer_in(key, node, name, 1, 10000));
     } else {
@@ -575,6 +578,8 @@ std::string machine_config_to_toml(const MachineConfig& c) {
   o += "\n[interpreter]\n";
   line("max_loop_iterations = " + std::to_string(c.max_loop_iterations),
        "runaway-loop guard for while/do/repeat (1 … 1e12)");
+  line("max_total_iterations = " + std::to_string(c.max_total_iterations),
+       "runaway guard for the whole program: loop passes + calls (1 … 1e12)");
   line("max_call_depth = " + std::to_string(c.max_call_depth),
        "O-word subroutine call nesting (1 … 10000)");
 

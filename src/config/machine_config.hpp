@@ -112,6 +112,8 @@ struct MachineConfig {
   // [interpreter]
   std::uint64_t max_loop_iterations = 1000000;  // runaway-loop guard for while/do/repeat
   std::uint32_t max_call_depth = 64;            // O-word call nesting
+  // Runaway guard for the whole program: loop passes, subroutine calls and M98 repeats summed.
+  std::uint64_t max_total_iterations = 10000000;
 
   // [tables] (table-format operation, spec 02)
   TableCancelMode table_cancel_mode = TableCancelMode::kClear;

@@ -76,9 +76,11 @@ CodeInfo g_code_info(int code10) {
     case 421:
       return no(GGroup::kCutterComp, "cutter compensation");
     case 430:
+      return ok(GGroup::kToolLength, "tool length offset");
     case 431:
+      return ok(GGroup::kToolLength, "dynamic tool length offset");
     case 432:
-      return no(GGroup::kToolLength, "tool length offset");
+      return ok(GGroup::kToolLength, "added tool length offset");
     case 490:
       return ok(GGroup::kToolLength, "tool length offset off");
     case 530:
@@ -104,16 +106,18 @@ CodeInfo g_code_info(int code10) {
     case 720:
       return no(GGroup::kMotion, "lathe finishing cycles");
     case 730:
-    case 760:
+    case 740:
     case 810:
     case 820:
     case 830:
     case 840:
     case 850:
     case 860:
-    case 870:
     case 880:
     case 890:
+      return ok(GGroup::kMotion, "canned cycle");
+    case 760:
+    case 870:
       return no(GGroup::kMotion, "canned cycle");
     case 800:
       return ok(GGroup::kMotion, "cancel motion mode");
@@ -173,7 +177,7 @@ CodeInfo m_code_info(int code10) {
     case 60:
       return okm(MGroup::kToolChange, "tool change");
     case 610:
-      return {true, false, static_cast<int>(MGroup::kToolChange), "set tool number"};
+      return okm(MGroup::kToolChange, "set tool number");
     case 70:
     case 80:
       return okm(MGroup::kCoolant, "coolant on");

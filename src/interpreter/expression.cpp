@@ -128,14 +128,17 @@ double Evaluator::raw_value(std::size_t& pos) {
   if (c == '[') return expression(pos);
   if (c == '#') return read(param_ref(pos));
   if (c == '-' || c == '+') {
+    // A chain of signs recurses once per sign: bounded like brackets.
+    if (++depth_ > kMaxNesting) fail(pos, "too many signs in a row");
     ++pos;
     const double v = real_value(pos);
+    --depth_;
     return c == '-' ? -v : v;
   }
   if (is_lower(c)) return unary_function(pos);
   double v = 0;
   if (!scan_number(line_, pos, v, ctx_)) {
-    fail(pos, std::string("bad number or value: unexpected '") + c + "'");
+    fail(pos, "bad number or value: unexpected '" + printable(c) + "'");
   }
   return v;
 }
@@ -169,7 +172,7 @@ double Evaluator::read(const ParamRef& ref) const {
   if (ref.number > 0) return params_.numbered(ref.number);
   const double* v = params_.find_named(ref.name);
   if (v == nullptr) {
-    ctx_.fail(ref.col, "undefined parameter #<" + std::string(ref.name) + ">");
+    ctx_.fail(ref.col, "undefined parameter #<" + printable(ref.name) + ">");
   }
   return *v;
 }
@@ -181,7 +184,7 @@ double Evaluator::expression(std::size_t& pos) {
   const double v = binary(pos, 0);
   if (pos >= t_.size() || t_[pos] != ']') {
     if (pos >= t_.size()) fail(open, "unclosed '[' in expression");
-    fail(pos, std::string("unexpected '") + t_[pos] + "' in expression");
+    fail(pos, "unexpected '" + printable(t_[pos]) + "' in expression");
   }
   ++pos;
   --depth_;
@@ -197,7 +200,7 @@ double Evaluator::binary(std::size_t& pos, int level) {
     const Op op = peek_op(t_, pos, len);
     if (op == Op::kNone) {
       if (pos < t_.size() && t_[pos] != ']') {
-        fail(pos, std::string("unknown operator '") + t_[pos] + "' in expression");
+        fail(pos, "unknown operator '" + printable(t_[pos]) + "' in expression");
       }
       return lhs;
     }
@@ -275,17 +278,29 @@ double Evaluator::unary_function(std::size_t& pos) {
   while (pos < t_.size() && is_lower(t_[pos])) ++pos;
   const std::string_view name = std::string_view(t_).substr(start, pos - start);
   if (pos >= t_.size() || t_[pos] != '[') {
-    fail(start, "unknown function or word '" + std::string(name) + "'");
+    fail(start, "unknown function or word '" + printable(name) + "'");
   }
   if (name == "exists") {
     // EXISTS[#<name>]: 1 when the named parameter has been set.
+    // EXISTS[#n]: 1 when n is a parameter number; 0 when it is out of range (no error).
     const std::size_t open = pos++;
-    if (pos >= t_.size() || t_[pos] != '#') fail(pos, "EXISTS needs a named parameter");
-    const ParamRef ref = param_ref(pos);
+    if (pos >= t_.size() || t_[pos] != '#') fail(pos, "EXISTS needs a parameter");
+    double result = 0;
+    if (pos + 1 < t_.size() && t_[pos + 1] == '<') {
+      const ParamRef ref = param_ref(pos);
+      result = params_.find_named(ref.name) != nullptr ? 1 : 0;
+    } else {
+      ++pos;
+      const double index = real_value(pos);
+      const double rounded = std::nearbyint(index);
+      result =
+          std::fabs(index - rounded) <= 1e-4 && rounded >= 1 && rounded <= Parameters::kMaxNumbered
+              ? 1
+              : 0;
+    }
     if (pos >= t_.size() || t_[pos] != ']') fail(open, "unclosed '[' after EXISTS");
     ++pos;
-    if (ref.number > 0) return 1;
-    return params_.find_named(ref.name) != nullptr ? 1 : 0;
+    return result;
   }
   const double arg = expression(pos);
   auto domain = [&](const char* what) { fail(start, std::string(what)); };
@@ -322,7 +337,7 @@ double Evaluator::unary_function(std::size_t& pos) {
   if (name == "round") return std::round(arg);
   if (name == "fix") return std::floor(arg);
   if (name == "fup") return std::ceil(arg);
-  fail(start, "unknown function '" + std::string(name) + "'");
+  fail(start, "unknown function '" + printable(name) + "'");
 }
 
 }  // namespace cncore::interp

@@ -48,15 +48,36 @@ const char* keyword_text(OKeyword k) {
   return "";
 }
 
+// The end of a parameter reference or bracketed expression at t[pos] ('#' or '['), found
+// without evaluating it (the lines skipped over are never evaluated).
+std::size_t skip_value(const std::string& t, std::size_t pos) {
+  while (pos < t.size() && t[pos] == '#') ++pos;
+  if (pos >= t.size()) return pos;
+  if (t[pos] == '<') {
+    const std::size_t close = t.find('>', pos);
+    return close == std::string::npos ? t.size() : close + 1;
+  }
+  if (t[pos] == '[') {
+    int depth = 0;
+    for (; pos < t.size(); ++pos) {
+      if (t[pos] == '[') ++depth;
+      if (t[pos] == ']' && --depth == 0) return pos + 1;
+    }
+    return pos;
+  }
+  while (pos < t.size() && (is_digit(t[pos]) || t[pos] == '.')) ++pos;
+  return pos;
+}
+
 std::string display(const std::string& label) {
-  return "o" + label;
+  return "o" + printable(label);
 }
 
 }  // namespace
 
 // Parses "[N…]oLABEL keyword" at the start of line_. Returns false when the line does not
 // start with an O word (used while skipping).
-bool Interpreter::Impl::parse_oword(OWord& o) const {
+bool Interpreter::Impl::parse_oword(OWord& o, bool evaluate) const {
   const std::string& t = line_.text;
   std::size_t pos = 0;
   if (!t.empty() && t[0] == 'n') {
@@ -67,7 +88,12 @@ bool Interpreter::Impl::parse_oword(OWord& o) const {
   o.col = line_.col(pos);
   ++pos;
   o.label.clear();
-  if (pos < t.size() && t[pos] == '<') {
+  std::size_t computed = std::string::npos;  // "o[#1+2] call", "o#<n> call": where it starts
+  if (pos < t.size() && (t[pos] == '[' || t[pos] == '#')) {
+    computed = pos;
+    pos = skip_value(t, pos);
+    o.label = t.substr(computed, pos - computed);
+  } else if (pos < t.size() && t[pos] == '<') {
     const std::size_t close = t.find('>', pos);
     if (close == std::string::npos) fail(o.col, "O word name without closing '>'");
     o.label = t.substr(pos, close - pos + 1);
@@ -90,7 +116,7 @@ bool Interpreter::Impl::parse_oword(OWord& o) const {
     }
   }
   if (o.keyword == OKeyword::kNone && pos < t.size()) {
-    fail(line_.col(pos), "unknown O-word keyword '" + t.substr(pos) + "'");
+    fail(line_.col(pos), "unknown O-word keyword '" + printable(t.substr(pos)) + "'");
   }
   // Keywords that take no value must end the line.
   switch (o.keyword) {
@@ -103,14 +129,24 @@ bool Interpreter::Impl::parse_oword(OWord& o) const {
     case OKeyword::kBreak:
     case OKeyword::kContinue:
       if (pos < t.size()) {
-        fail(line_.col(pos), fmt::format("unexpected '{}' after o{} {}", t.substr(pos), o.label,
-                                         keyword_text(o.keyword)));
+        fail(line_.col(pos), fmt::format("unexpected '{}' after o{} {}", printable(t.substr(pos)),
+                                         printable(o.label), keyword_text(o.keyword)));
       }
       break;
     default:
       break;
   }
   o.args = pos;
+  if (computed != std::string::npos && evaluate) {
+    if (o.keyword != OKeyword::kCall) fail(o.col, "a computed O number is allowed only with call");
+    std::size_t p = computed;
+    Evaluator eval(line_, ctx_, params_);
+    const double v = eval.real_value(p);
+    if (v < 0 || v != std::floor(v) || v > 1e9) {
+      fail(line_.col(computed), fmt::format("O number {} is not a program number", v));
+    }
+    o.label = fmt::format("{}", static_cast<long long>(v));
+  }
   return true;
 }
 
@@ -133,8 +169,19 @@ void Interpreter::Impl::loop_limit(const Loop& loop) const {
                                display(loop.label), machine_.max_loop_iterations));
 }
 
-void Interpreter::Impl::count_iteration(Loop& loop) const {
+void Interpreter::Impl::count_iteration(Loop& loop) {
   if (++loop.iterations >= machine_.max_loop_iterations) loop_limit(loop);
+  spend(loop.line, loop.col);
+}
+
+// Nested loops and calls multiply: each may stay under max_loop_iterations while the program
+// as a whole never ends. Every pass and call spends from one budget for the whole program.
+void Interpreter::Impl::spend(std::uint32_t line, std::uint32_t col) {
+  if (++passes_ <= machine_.max_total_iterations) return;
+  throw InputError(file_, line, col,
+                   fmt::format("runaway program: loops and calls made more than "
+                               "max_total_iterations ({}) passes in all",
+                               machine_.max_total_iterations));
 }
 
 // Reads forward to the O-word line with label `from.label` and one of `stops`, leaving line_
@@ -207,9 +254,13 @@ void Interpreter::Impl::execute_oword(const OWord& o) {
   words_.first_col = o.col;
   switch (o.keyword) {
     case OKeyword::kNone: {
-      // Fanuc program number. The first one names the main program; later ones start
+      // Fanuc program number. One met before the program has produced anything (only
+      // comments, parameters or modes before it) names the main program; later ones start
       // subprograms (called with M98), which are skipped when reached in sequence.
-      if (!started_) return;
+      if (!produced_ && frames_.empty() && !main_titled_) {
+        main_titled_ = true;
+        return;
+      }
       subs_.try_emplace("F" + o.label, SubDef{reader_.following(), ctx_.line});
       skip_fanuc_sub(ctx_.line);
       return;
@@ -259,6 +310,7 @@ void Interpreter::Impl::execute_oword(const OWord& o) {
         fail(o.col, fmt::format("call of {} exceeds max_call_depth ({})", display(o.label),
                                 machine_.max_call_depth));
       }
+      spend(ctx_.line, o.col);
       Frame f;
       f.label = o.label;
       f.return_to = reader_.following();
@@ -441,11 +493,18 @@ void Interpreter::Impl::call_fanuc(std::uint32_t col) {
 
 // M99: end of a Fanuc subprogram; repeat it while L count remains, else return.
 void Interpreter::Impl::return_fanuc(std::uint32_t col) {
+  if (frames_.empty() && main_titled_) {
+    // The end of a main program "O1 … M99": a controller would start it again; like
+    // LinuxCNC's rs274, cncore runs it once.
+    finished_ = true;
+    return;
+  }
   if (frames_.empty() || !frames_.back().fanuc) {
     fail(col, "M99 outside an M98 subprogram (restarting the main program is not supported)");
   }
   Frame& f = frames_.back();
   loops_.resize(f.loop_depth);
+  spend(f.line, f.col);
   if (--f.repeats_left > 0) {
     reader_.seek(f.body);
     return;

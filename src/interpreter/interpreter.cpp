@@ -1,6 +1,6 @@
 // Reading and executing blocks: word parsing, modal-group checks, and the LinuxCNC order of
-// execution within a block. Flow control (O-words, M98/M99) lives in flow.cpp, the arc
-// geometry in arcs.cpp.
+// execution within a block. Moves are made in motion.cpp, offsets in offsets.cpp, flow control
+// (O-words, M98/M99) in flow.cpp, the arc geometry in arcs.cpp.
 #include "interpreter/interpreter.hpp"
 
 #include <fmt/format.h>
@@ -13,50 +13,16 @@
 
 namespace cncore::interp {
 
-namespace {
-
-constexpr std::size_t kLinearAxes = 3;
-constexpr double kZeroMoveMm = 1e-9;  // moves shorter than this are not emitted
-
-// LinuxCNC CENTER_ARC_RADIUS_TOLERANCE_{MM,INCH} = 2·0.01·√2 mm, 2·0.001·√2 in, and the
-// relative tolerance 0.1 % (both must be exceeded for an error, or 100× the absolute one).
-constexpr double kArcAbsTolMm = 2 * 0.01 * 1.4142135623730951;
-constexpr double kArcAbsTolInch = 2 * 0.001 * 1.4142135623730951;
-constexpr double kArcRelTol = 0.001;
-// R-form: half-chord may exceed |R| by this much (LinuxCNC TOLERANCE_MM / TOLERANCE_INCH).
-constexpr double kRadiusTolMm = 0.005;
-constexpr double kRadiusTolInch = 0.0005;
-
-constexpr std::array<char, kMaxAxes> kAxisWords = {'x', 'y', 'z', 'a', 'b', 'c'};
-
-bool is_rotary(std::size_t axis) {
-  return axis >= kLinearAxes;
-}
-
-// Parameter numbers (LinuxCNC) for state kept in the parameter table; lengths in mm.
-constexpr int kParamG28Home = 5161;
-constexpr int kParamG30Home = 5181;
-constexpr int kParamG92Applied = 5210;
-constexpr int kParamG92 = 5211;
-constexpr int kParamCoordSystem = 5220;
-constexpr int kParamWorkOffsets = 5221;  // + 20·(system − 1) + axis
-constexpr int kParamTool = 5400;
-constexpr int kParamPosition = 5420;
-
-int work_param(int system, std::size_t axis) {
-  return kParamWorkOffsets + 20 * (system - 1) + static_cast<int>(axis);
-}
-
-}  // namespace
-
-Interpreter::Impl::Impl(LineReader r, std::string name, const MachineConfig& m,
-                        const Options& options)
-    : file_(std::move(name)), machine_(m), reader_(std::move(r)) {
+Interpreter::Impl::Impl(LineReader r, std::string name, MachineConfig m, const Options& options)
+    : file_(std::move(name)), machine_(std::move(m)), reader_(std::move(r)) {
   ctx_.file = &file_;
   params_.set_live(this);
   for (std::size_t a = 0; a < kMaxAxes; ++a) pos_[a] = machine_.start_position[a];
   if (options.modal) modal_ = *options.modal;
   params_.set_numbered(kParamCoordSystem, modal_.coord_system);
+  // LinuxCNC defines these before any call returns, so a program may read them at once.
+  params_.set_named("_value", 0);
+  params_.set_named("_value_returned", 0);
   for (const auto& [n, v] : options.params) {
     if (!Parameters::valid_number(n)) {
       throw InputError(file_, 0, 0, fmt::format("--param {}: no such parameter number", n));
@@ -77,6 +43,7 @@ Interpreter::Impl::Impl(LineReader r, std::string name, const MachineConfig& m,
     }
     params_.set_named(key, v);
   }
+  init_tools(options);
   out_.reserve(8);
   words_.assignments.reserve(8);
 }
@@ -89,6 +56,7 @@ bool Interpreter::Impl::next(Block& out) {
     step();
   }
   out = out_[out_head_++];
+  produced_ = true;
   return true;
 }
 
@@ -108,13 +76,6 @@ bool Interpreter::Impl::recover() {
   return !finished_;
 }
 
-double Interpreter::Impl::offset(std::size_t axis) const {
-  double off = params_.stored(work_param(modal_.coord_system, axis));
-  if (params_.stored(kParamG92Applied) != 0)
-    off += params_.stored(kParamG92 + static_cast<int>(axis));
-  return off;
-}
-
 bool Interpreter::Impl::read_live(int number, double& value) const {
   if (number >= kParamPosition && number < kParamPosition + static_cast<int>(kMaxAxes)) {
     const auto axis = static_cast<std::size_t>(number - kParamPosition);
@@ -122,11 +83,7 @@ bool Interpreter::Impl::read_live(int number, double& value) const {
     value = (pos_[axis] - offset(axis)) / unit;
     return true;
   }
-  if (number == kParamTool) {
-    value = modal_.tool;
-    return true;
-  }
-  return false;
+  return read_tool_param(number, value);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -163,7 +120,7 @@ void Interpreter::Impl::step() {
   }
   if (line_.text[pos] == 'o') {
     OWord o;
-    parse_oword(o);
+    parse_oword(o, true);
     execute_oword(o);
     started_ = true;
     return;
@@ -173,12 +130,36 @@ void Interpreter::Impl::step() {
   execute_words();
 }
 
+// An E word at t[pos]. Right after the digits of an axis or parameter value ("X1e400") it is
+// C's exponent notation, which G-code does not have: say so instead of "unknown word".
+void Interpreter::Impl::exponent_or_unknown(std::size_t pos, std::size_t value_start,
+                                            char last_letter) const {
+  const std::string& t = line_.text;
+  // Written together, as in "1e400" (not "X10 E5": spaces are gone from the text, not from
+  // the column map).
+  const bool after_number = pos > value_start && (is_digit(t[pos - 1]) || t[pos - 1] == '.') &&
+                            line_.col(pos) == line_.col(pos - 1) + 1 &&
+                            line_.col(pos + 1) == line_.col(pos) + 1;
+  std::size_t e = pos + 1;
+  if (e < t.size() && (t[e] == '-' || t[e] == '+')) ++e;
+  if (after_number && last_letter != 'g' && last_letter != 'm' && e < t.size() && is_digit(t[e])) {
+    while (e < t.size() && is_digit(t[e])) ++e;
+    std::size_t start = pos;
+    while (start > value_start && (is_digit(t[start - 1]) || t[start - 1] == '.')) --start;
+    fail(line_.col(start), "bad number '" + printable(t.substr(start, e - start)) +
+                               "': G-code numbers have no exponent (write the digits out)");
+  }
+  fail(line_.col(pos), "unknown word 'E'");
+}
+
 void Interpreter::Impl::parse_words(std::size_t pos) {
   Words& w = words_;
   w.clear();
   w.first_col = line_.col(pos);
   Evaluator eval(line_, ctx_, params_);
   const std::string& t = line_.text;
+  char last_letter = 0;         // the word letter before the current one
+  std::size_t value_start = 0;  // where that word's value began
   while (pos < t.size()) {
     const char c = t[pos];
     const std::uint32_t col = line_.col(pos);
@@ -196,7 +177,7 @@ void Interpreter::Impl::parse_words(std::size_t pos) {
       fail(col, fmt::format("polar coordinates ('{}' word) are not supported", c));
     }
     if (!is_lower(c)) {
-      fail(col, fmt::format("unexpected character '{}'", c));
+      fail(col, fmt::format("unexpected character '{}'", printable(c)));
     }
     const char upper = static_cast<char>(c - 'a' + 'A');
     switch (c) {
@@ -208,11 +189,13 @@ void Interpreter::Impl::parse_words(std::size_t pos) {
       case 'u':
       case 'v':
       case 'w':
-        if (c == 'e') fail(col, "unknown word 'E'");
+        if (c == 'e') exponent_or_unknown(pos, value_start, last_letter);
         fail(col, fmt::format("{} axis is not supported (cncore axes: X Y Z A B C)", upper));
       case 'g':
       case 'm': {
         ++pos;
+        last_letter = c;
+        value_start = pos;
         const double v = eval.real_value(pos);
         if (v < 0 || v > 10000) fail(col, fmt::format("unknown {} code {}{}", upper, upper, v));
         const double v10 = v * 10;
@@ -230,6 +213,13 @@ void Interpreter::Impl::parse_words(std::size_t pos) {
           fail(col, fmt::format("too many {} words in one block", upper));
         int& slot = is_g ? w.g_group[static_cast<std::size_t>(info.group)]
                          : w.m_group[static_cast<std::size_t>(info.group)];
+        if (slot >= 0 && is_g && info.group == static_cast<int>(GGroup::kMotion) &&
+            (code10 == 800 || list[static_cast<std::size_t>(slot)].code10 == 800)) {
+          // "G0 G80" (Fanuc, where G80 has a group of its own): the cycle is cancelled and
+          // the other motion code is the block's motion.
+          if (code10 != 800) list[static_cast<std::size_t>(slot)] = {code10, col};
+          continue;
+        }
         if (slot >= 0) {
           const int other = list[static_cast<std::size_t>(slot)].code10;
           // LinuxCNC lets M7 and M8 (mist and flood) share a block.
@@ -249,6 +239,8 @@ void Interpreter::Impl::parse_words(std::size_t pos) {
     Words::Value& slot = w.letter[static_cast<std::size_t>(c - 'a')];
     if (slot.present) fail(col, fmt::format("two {} words in one block", upper));
     ++pos;
+    last_letter = c;
+    value_start = pos;
     if (pos < t.size() && is_lower(t[pos]) && !(pos + 1 < t.size() && t[pos + 1] == '[')) {
       // A letter followed by another word letter: the value is missing ("X Y1") unless it
       // is a function such as SIN[…].
@@ -315,7 +307,6 @@ void Interpreter::Impl::execute_words() {
     }
   }
   if (w.has('d')) fail(w['d'].col, "D word: cutter compensation (G41/G42) is not supported");
-  if (w.has('h')) fail(w['h'].col, "H word: tool length offset (G43) is not supported");
 
   // The units of this block: a G20/G21 in the block applies to all its numbers (cncore reads
   // F with them too, so "G20 F10" is 10 in/min).
@@ -334,21 +325,9 @@ void Interpreter::Impl::execute_words() {
     if (w['s'].value < 0) fail(w['s'].col, "negative spindle speed S");
     emit_aux('S', w['s'].value, false);
   }
-  // 6 T (select: the tool is prepared; M6 makes it current)
-  int selected_tool = modal_.tool;
-  if (w.has('t')) {
-    const double tv = w['t'].value;
-    if (tv < 0 || tv != std::floor(tv) || tv > 1e9) {
-      fail(w['t'].col, "T must be a tool number (a non-negative integer)");
-    }
-    selected_tool = static_cast<int>(tv);
-    emit_aux('T', tv, false);
-  }
-  // 8 M6
-  if (w.mgroup(MGroup::kToolChange) != nullptr) {
-    modal_.tool = selected_tool;
-    emit_aux('M', 6, true);
-  }
+  // 6 T (select: the tool is prepared; M6 makes it current), 8 M6 / M61
+  if (w.has('t')) select_tool();
+  if (const auto* m = w.mgroup(MGroup::kToolChange)) change_tool(*m);
   // 9 spindle
   if (const auto* m = w.mgroup(MGroup::kSpindle)) emit_aux('M', m->code10 / 10.0, true);
   // 10 overrides: M52 adaptive feed control (spec 04), P1 or no P on, P0 off. An aux event
@@ -405,7 +384,12 @@ void Interpreter::Impl::execute_words() {
   }
   // 16 units
   modal_.inch = inch;
-  // 17 G40, 18 G49: compensation is never on, nothing to cancel.
+  // 17 G40: cutter compensation is never on, nothing to cancel. 18 tool length offset.
+  if (const auto* g = w.group(GGroup::kToolLength)) {
+    tool_length(*g);
+  } else if (w.has('h')) {
+    fail(w['h'].col, "H word without G43 or G43.2");
+  }
   // 19 coordinate system
   if (const auto* g = w.group(GGroup::kCoordSystem)) {
     modal_.coord_system = g->code10 <= 590 ? (g->code10 - 540) / 10 + 1 : 7 + (g->code10 - 591);
@@ -436,7 +420,8 @@ void Interpreter::Impl::execute_words() {
   // 21 distance mode, 22 arc distance mode
   if (const auto* g = w.group(GGroup::kDistance)) modal_.absolute = g->code10 == 900;
   if (const auto* g = w.group(GGroup::kArcDistance)) modal_.arc_absolute = g->code10 == 901;
-  // 23 G98/G99: retract modes of canned cycles, which cncore does not run.
+  // 23 G98/G99: the canned cycles' retract mode
+  if (const auto* g = w.group(GGroup::kCannedReturn)) modal_.retract_to_r = g->code10 == 990;
 
   // Which words are axis words, and who uses them.
   bool have_axes = false;
@@ -451,10 +436,17 @@ void Interpreter::Impl::execute_words() {
     have_axes = true;
   }
   const Words::Code* motion_word = w.group(GGroup::kMotion);
-  const bool axes_for_nonmodal = nm == 100 || nm == 280 || nm == 300 || nm == 920;
+  const Words::Code* tool_word = w.group(GGroup::kToolLength);
+  const int axes_user =
+      (tool_word != nullptr && tool_word->code10 != 430 && tool_word->code10 != 490)
+          ? tool_word->code10  // G43.1, G43.2 take offsets from axis words
+          : nm;
+  const bool axes_for_nonmodal = axes_user == 100 || axes_user == 280 || axes_user == 300 ||
+                                 axes_user == 920 || axes_user == 431 || axes_user == 432;
   if (axes_for_nonmodal && motion_word != nullptr && motion_word->code10 != 800 && have_axes) {
-    fail(motion_word->col, fmt::format("{} and {} both use the axis words", code_text('G', nm),
-                                       code_text('G', motion_word->code10)));
+    fail(motion_word->col,
+         fmt::format("{} and {} both use the axis words", code_text('G', axes_user),
+                     code_text('G', motion_word->code10)));
   }
 
   // 24 offsets and homing
@@ -476,16 +468,21 @@ void Interpreter::Impl::execute_words() {
       case 30:
         modal_.motion = Motion::kArcCcw;
         break;
-      default:
+      case 800:
         modal_.motion = Motion::kNone;
-        break;  // G80
+        break;
+      default:
+        modal_.motion = Motion::kCycle;
+        modal_.cycle = motion_word->code10;
+        break;
     }
   }
   const bool arc_mode = modal_.motion == Motion::kArcCw || modal_.motion == Motion::kArcCcw;
   const bool have_centre = w.has('i') || w.has('j') || w.has('k');
+  const bool cycle_mode = modal_.motion == Motion::kCycle;
   if (!arc_mode) {
     for (char c : {'i', 'j', 'k', 'r'}) {
-      if (w.has(c) && !(c == 'r' && nm == 100)) {
+      if (w.has(c) && !(c == 'r' && (nm == 100 || cycle_mode))) {
         fail(w[c].col, fmt::format("{} word without G2/G3", static_cast<char>(c - 'a' + 'A')));
       }
     }
@@ -502,13 +499,16 @@ void Interpreter::Impl::execute_words() {
       }
       if (!modal_.absolute) fail(nonmodal->col, "G53 cannot be used in incremental mode G91");
     }
-    if (have_axes || (arc_mode && (have_centre || w.has('r')))) {
+    const bool cycle_words = cycle_mode && (w.has('r') || motion_word != nullptr);
+    if (have_axes || (arc_mode && (have_centre || w.has('r'))) || cycle_words) {
       if (modal_.motion == Motion::kNone) {
         fail(have_axes ? first_axis_col : w.first_col,
              "axis words without a motion mode: program G0, G1, G2 or G3 first");
       }
-      const AxisVec target = target_from_words(machine_coords);
-      if (arc_mode) {
+      if (cycle_mode) {
+        if (machine_coords) fail(nonmodal->col, "G53 with a canned cycle");
+        canned_cycle(motion_word != nullptr ? motion_word->col : col);
+      } else if (const AxisVec target = target_from_words(machine_coords); arc_mode) {
         arc(target, modal_.motion == Motion::kArcCcw, col);
       } else {
         line_motion(target, col);
@@ -541,268 +541,6 @@ void Interpreter::Impl::execute_words() {
   }
 }
 
-AxisVec Interpreter::Impl::target_from_words(bool machine_coords) const {
-  AxisVec target = pos_;
-  const double unit = modal_.length_unit_mm();
-  for (std::size_t a = 0; a < kMaxAxes; ++a) {
-    const auto& v = words_[kAxisWords[a]];
-    if (!v.present) continue;
-    const double value = v.value * (is_rotary(a) ? 1.0 : unit);
-    if (machine_coords) {
-      target[a] = value;  // G53: machine coordinates, no offsets
-    } else if (modal_.absolute) {
-      target[a] = value + offset(a);  // G90: program coordinate + work offset (+ G92)
-    } else {
-      target[a] = pos_[a] + value;  // G91
-    }
-  }
-  return target;
-}
-
-void Interpreter::Impl::check_travel(const AxisVec& lo, const AxisVec& hi, const AxisVec& target,
-                                     std::uint32_t col) {
-  constexpr double kSlack = 1e-9;
-  if (beyond_travel_) {
-    bool inside = true;
-    for (std::size_t a = 0; a < kMaxAxes; ++a) {
-      const AxisConfig& ax = machine_.axes[a];
-      if (!ax.enabled || ax.max_mm <= ax.min_mm) continue;
-      inside = inside && hi[a] <= ax.max_mm + kSlack && lo[a] >= ax.min_mm - kSlack;
-    }
-    if (!inside) return;  // still out there, as a consequence of the first error
-    beyond_travel_ = false;
-  }
-  travel_target_ = target;
-  travel_failed_ = true;  // cleared below when the move stays inside
-  for (std::size_t a = 0; a < kMaxAxes; ++a) {
-    const AxisConfig& ax = machine_.axes[a];
-    if (!ax.enabled || ax.max_mm <= ax.min_mm) continue;  // rotary without limits
-    const auto& word = words_[kAxisWords[a]];
-    const std::uint32_t c = word.present ? word.col : col;
-    if (hi[a] > ax.max_mm + kSlack) {
-      fail(c, fmt::format("{} {:.3f} is beyond the travel limit {:.3f}", kAxisLetters[a], hi[a],
-                          ax.max_mm));
-    }
-    if (lo[a] < ax.min_mm - kSlack) {
-      fail(c, fmt::format("{} {:.3f} is beyond the travel limit {:.3f}", kAxisLetters[a], lo[a],
-                          ax.min_mm));
-    }
-  }
-  travel_failed_ = false;
-}
-
-void Interpreter::Impl::emit_motion(BlockKind kind, const AxisVec& target, std::uint32_t col) {
-  Block b = base_block(kind);
-  b.end = target;
-  b.col = col;
-  b.feed_mm_min = kind == BlockKind::kRapid ? 0 : modal_.feed_mm_min;
-  b.path_mode =
-      words_.group(GGroup::kExactStopOnce) != nullptr ? PathMode::kExactStop : modal_.path_mode;
-  b.tolerance_mm = b.path_mode == PathMode::kBlend ? modal_.tolerance_mm : -1;
-  b.smooth_tolerance_mm = modal_.smooth_tolerance_mm;
-  out_.push_back(b);
-}
-
-// G0/G1 to `target` (machine coordinates).
-void Interpreter::Impl::line_motion(const AxisVec& target, std::uint32_t col) {
-  const bool rapid = modal_.motion == Motion::kRapid;
-  if (!rapid && !modal_.feed_set) {
-    fail(col, "no feed rate: program F before the first G1/G2/G3");
-  }
-  if (!rapid && modal_.feed_mm_min <= 0) fail(col, "feed rate F is zero");
-  check_travel(target, target, target, col);
-  double len2 = 0;
-  for (std::size_t a = 0; a < kMaxAxes; ++a) len2 += (target[a] - pos_[a]) * (target[a] - pos_[a]);
-  if (len2 > kZeroMoveMm * kZeroMoveMm) {
-    emit_motion(rapid ? BlockKind::kRapid : BlockKind::kLine, target, col);
-  }
-  pos_ = target;
-}
-
-// G2/G3. The centre comes from R (centre_from_radius) or from I J K (check_centre); the helix
-// axis (plane normal) and any other axes move linearly with the angle.
-void Interpreter::Impl::arc(const AxisVec& target, bool ccw, std::uint32_t col) {
-  const Words& w = words_;
-  const char* g = ccw ? "G3" : "G2";
-  if (!modal_.feed_set) fail(col, "no feed rate: program F before the first G1/G2/G3");
-  if (modal_.feed_mm_min <= 0) fail(col, "feed rate F is zero");
-  const PlaneAxes pa = plane_axes(modal_.plane);
-  const double unit = modal_.length_unit_mm();
-  const Vec2 s{pos_[pa.first], pos_[pa.second]};
-  const Vec2 e{target[pa.first], target[pa.second]};
-  Vec2 c;
-  if (w.has(pa.normal_word)) {
-    const char up = static_cast<char>(pa.normal_word - 'a' + 'A');
-    fail(w[pa.normal_word].col,
-         fmt::format("{} word given for an arc in the {} plane", up, plane_gcode(modal_.plane)));
-  }
-  const bool has_first = w.has(pa.first_word), has_second = w.has(pa.second_word);
-  if (w.has('r')) {
-    if (has_first || has_second) fail(w['r'].col, "arc with both R and I/J/K");
-    const double tol = modal_.inch ? kRadiusTolInch * 25.4 : kRadiusTolMm;
-    const ArcCheck chk = centre_from_radius(s, e, w['r'].value * unit, ccw, tol, c);
-    if (!chk.ok) fail(w['r'].col, chk.message);
-  } else {
-    if (!has_first && !has_second) {
-      fail(col, fmt::format("{} arc without centre (I J K) or radius (R)", g));
-    }
-    const double i = w[pa.first_word].value * unit;  // absent words are 0
-    const double j = w[pa.second_word].value * unit;
-    if (modal_.arc_absolute) {
-      c = {i + offset(pa.first), j + offset(pa.second)};  // G90.1: program coordinates
-    } else {
-      c = {s.a + i, s.b + j};  // G91.1: relative to the start point
-    }
-    const double abs_tol = modal_.inch ? kArcAbsTolInch * 25.4 : kArcAbsTolMm;
-    const ArcCheck chk = check_centre(s, e, c, abs_tol, kArcRelTol);
-    if (!chk.ok) {
-      const double r0 = std::hypot(s.a - c.a, s.b - c.b), r1 = std::hypot(e.a - c.a, e.b - c.b);
-      fail(col,
-           fmt::format("{} ({:.4f} mm at the start, {:.4f} mm at the end)", chk.message, r0, r1));
-    }
-  }
-  std::uint32_t turns = 0;
-  if (w.has('p')) {
-    const double p = w['p'].value;
-    if (p < 1 || p != std::floor(p) || p > 1e6) {
-      fail(w['p'].col, "arc turns P must be a positive integer");
-    }
-    turns = static_cast<std::uint32_t>(p) - 1;
-  }
-  // Travel: the end point, plus the axis-aligned extremes of the circle that the arc passes.
-  // When the whole circle (c ± r) lies inside the travel, the extremes need not be computed.
-  AxisVec lo = target, hi = target;
-  for (std::size_t a = 0; a < kMaxAxes; ++a) {
-    lo[a] = std::min(pos_[a], target[a]);
-    hi[a] = std::max(pos_[a], target[a]);
-  }
-  const double r = std::sqrt((s.a - c.a) * (s.a - c.a) + (s.b - c.b) * (s.b - c.b));
-  const AxisConfig& fa = machine_.axes[pa.first];
-  const AxisConfig& sa = machine_.axes[pa.second];
-  const bool circle_inside =
-      c.a - r >= fa.min_mm && c.a + r <= fa.max_mm && c.b - r >= sa.min_mm && c.b + r <= sa.max_mm;
-  if (!circle_inside) {
-    const double sweep = arc_sweep(s, e, c, ccw, turns);
-    Vec2 lo2, hi2;
-    arc_bounds(s, e, c, sweep, lo2, hi2);
-    lo[pa.first] = lo2.a;
-    lo[pa.second] = lo2.b;
-    hi[pa.first] = hi2.a;
-    hi[pa.second] = hi2.b;
-  }
-  check_travel(lo, hi, target, col);
-
-  Block b = base_block(BlockKind::kArc);
-  b.col = col;
-  b.end = target;
-  b.feed_mm_min = modal_.feed_mm_min;
-  b.path_mode =
-      w.group(GGroup::kExactStopOnce) != nullptr ? PathMode::kExactStop : modal_.path_mode;
-  b.tolerance_mm = b.path_mode == PathMode::kBlend ? modal_.tolerance_mm : -1;
-  std::array<double, 3> centre{};
-  centre[pa.first] = c.a;
-  centre[pa.second] = c.b;
-  centre[pa.normal] = pos_[pa.normal];  // projected into the plane of the start point
-  b.center = {centre[0], centre[1], centre[2]};
-  std::array<double, 3> normal{};
-  normal[pa.normal] = ccw ? 1.0 : -1.0;
-  b.normal = {normal[0], normal[1], normal[2]};
-  b.turns = turns;
-  out_.push_back(b);
-  pos_ = target;
-}
-
-// G10 L2 / L20 (work offsets), G92, G92.1, G92.2, G92.3.
-void Interpreter::Impl::set_offsets() {
-  const Words& w = words_;
-  const Words::Code* g = w.group(GGroup::kNonModal);
-  const double unit = modal_.length_unit_mm();
-  auto scaled = [&](std::size_t a) { return w[kAxisWords[a]].value * (is_rotary(a) ? 1.0 : unit); };
-  switch (g->code10) {
-    case 100: {
-      if (!w.has('l')) fail(g->col, "G10 without L");
-      const double l = w['l'].value;
-      if (l == 1 || l == 10 || l == 11) {
-        fail(w['l'].col, fmt::format("G10 L{} tool table data is not supported", l));
-      }
-      if (l != 2 && l != 20) fail(w['l'].col, fmt::format("G10 L{}: unknown G10 form", l));
-      if (w.has('r')) fail(w['r'].col, "G10 R: coordinate system rotation is not supported");
-      if (!w.has('p')) fail(g->col, "G10 L2/L20 without P (coordinate system 0…9)");
-      const double p = w['p'].value;
-      if (p < 0 || p > 9 || p != std::floor(p)) fail(w['p'].col, "G10 P must be 0…9");
-      const int system = p == 0 ? modal_.coord_system : static_cast<int>(p);
-      for (std::size_t a = 0; a < kMaxAxes; ++a) {
-        if (!w[kAxisWords[a]].present) continue;
-        double value;
-        if (l == 2) {
-          value = scaled(a);  // L2: the offset itself (G90/G91 do not apply)
-        } else {
-          // L20: choose the offset so that the current position reads `value`:
-          // pos = value + work + g92  →  work = pos − g92 − value
-          const double g92 = params_.numbered(kParamG92Applied) != 0
-                                 ? params_.numbered(kParamG92 + static_cast<int>(a))
-                                 : 0.0;
-          value = pos_[a] - g92 - scaled(a);
-        }
-        params_.set_numbered(work_param(system, a), value);
-      }
-      break;
-    }
-    case 920: {
-      bool any = false;
-      // G92: pos = value + work + g92  →  g92 = pos − work − value, for the named axes.
-      for (std::size_t a = 0; a < kMaxAxes; ++a) {
-        if (!w[kAxisWords[a]].present) continue;
-        any = true;
-        const double work = params_.numbered(work_param(modal_.coord_system, a));
-        params_.set_numbered(kParamG92 + static_cast<int>(a), pos_[a] - work - scaled(a));
-      }
-      if (!any) fail(g->col, "G92 without axis words");
-      params_.set_numbered(kParamG92Applied, 1);
-      break;
-    }
-    case 921:
-      for (std::size_t a = 0; a < kMaxAxes; ++a)
-        params_.set_numbered(kParamG92 + static_cast<int>(a), 0);
-      params_.set_numbered(kParamG92Applied, 0);
-      break;
-    case 922:
-      params_.set_numbered(kParamG92Applied, 0);
-      break;
-    case 923:
-      params_.set_numbered(kParamG92Applied, 1);
-      break;
-    default:
-      break;
-  }
-}
-
-// G28/G30: rapid through the optional intermediate point (the axis words, in program
-// coordinates) to the stored home position (#5161… / #5181…, machine coordinates, mm), moving
-// only the named axes, or all axes when none is named. G28.1/G30.1 store the current position.
-void Interpreter::Impl::go_home(int code10) {
-  const int base = (code10 == 280 || code10 == 281) ? kParamG28Home : kParamG30Home;
-  if (code10 == 281 || code10 == 301) {
-    for (std::size_t a = 0; a < kMaxAxes; ++a)
-      params_.set_numbered(base + static_cast<int>(a), pos_[a]);
-    return;
-  }
-  const std::uint32_t col = words_.group(GGroup::kNonModal)->col;
-  bool any = false;
-  for (std::size_t a = 0; a < kMaxAxes; ++a) any = any || words_[kAxisWords[a]].present;
-  const Motion saved = modal_.motion;
-  modal_.motion = Motion::kRapid;
-  if (any) line_motion(target_from_words(false), col);
-  AxisVec home = pos_;
-  for (std::size_t a = 0; a < kMaxAxes; ++a) {
-    if (!machine_.axes[a].enabled) continue;
-    if (!any || words_[kAxisWords[a]].present)
-      home[a] = params_.numbered(base + static_cast<int>(a));
-  }
-  line_motion(home, col);
-  modal_.motion = saved;
-}
-
 // ---------------------------------------------------------------------------------------------
 
 Interpreter::Interpreter(const std::string& path, const MachineConfig& machine,
@@ -825,6 +563,10 @@ bool Interpreter::recover() {
 }
 bool Interpreter::beyond_travel() const {
   return impl_->beyond_travel_;
+}
+
+CanonFrame Interpreter::canon_frame() const {
+  return {impl_->modal_.length_unit_mm(), impl_->tool_offset_};
 }
 
 }  // namespace cncore::interp

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "config/machine_config.hpp"
+#include "config/tool_table.hpp"
 #include "core/block.hpp"
 #include "interpreter/modal_state.hpp"
 
@@ -22,6 +23,14 @@ struct Options {
   // The modal state to start in (a controller carries it from one MDI line or program to the
   // next); none: the defaults (G17 G21 G90 G54 G64 G80).
   std::optional<ModalState> modal;
+  ToolTable tools;  // --tool-table FILE: replaces the machine's [[tools]] entries it lists
+};
+
+// What LinuxCNC's canonical positions leave out of a block's machine coordinates: the program
+// units and the tool length offset in force when the block was made.
+struct CanonFrame {
+  double unit_mm = 1;  // 25.4 in G20
+  AxisVec tool_offset_mm;
 };
 
 class Interpreter {
@@ -57,9 +66,22 @@ class Interpreter {
   // The modal state as it stands now (see Options::modal).
   ModalState modal_state() const;
 
+  // The frame of the block next() handed out last (for CanonPrinter).
+  CanonFrame canon_frame() const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+};
+
+// `cncore check --canon`: LinuxCNC's canonical-machine calls (STRAIGHT_TRAVERSE, STRAIGHT_FEED,
+// ARC_FEED, SET_FEED_RATE, DWELL), one per line, for each block in turn.
+class CanonPrinter {
+ public:
+  std::string print(const Block& block, const CanonFrame& frame);
+
+ private:
+  double last_feed_ = -1;
 };
 
 // One line of `cncore check --blocks` for a block (stable text format used by golden tests,

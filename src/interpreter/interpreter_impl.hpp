@@ -20,6 +20,44 @@
 
 namespace cncore::interp {
 
+inline constexpr std::size_t kLinearAxes = 3;
+inline constexpr double kZeroMoveMm = 1e-9;  // moves shorter than this are not emitted
+
+// LinuxCNC CENTER_ARC_RADIUS_TOLERANCE_{MM,INCH} = 2·0.01·√2 mm, 2·0.001·√2 in, and the
+// relative tolerance 0.1 % (both must be exceeded for an error, or 100× the absolute one).
+inline constexpr double kArcAbsTolMm = 2 * 0.01 * 1.4142135623730951;
+inline constexpr double kArcAbsTolInch = 2 * 0.001 * 1.4142135623730951;
+inline constexpr double kArcRelTol = 0.001;
+// R-form: half-chord may exceed |R| by this much (LinuxCNC TOLERANCE_MM / TOLERANCE_INCH).
+inline constexpr double kRadiusTolMm = 0.005;
+inline constexpr double kRadiusTolInch = 0.0005;
+// An I J K arc whose end radius differs from its start radius by more than kSpiralMinMm is a
+// spiral (arc_spiral), made of arcs whose radii change by at most kSpiralPieceMm each. Below
+// it (4-decimal rounding of inch CAM output stays under 0.004 mm), one arc with the centre
+// moved onto the chord's bisector, within half of kSpiralMinMm of the spiral.
+inline constexpr double kSpiralMinMm = 0.005;
+inline constexpr double kSpiralPieceMm = 0.001;
+
+inline constexpr std::array<char, kMaxAxes> kAxisWords = {'x', 'y', 'z', 'a', 'b', 'c'};
+
+inline bool is_rotary(std::size_t axis) {
+  return axis >= kLinearAxes;
+}
+
+// Parameter numbers (LinuxCNC) for state kept in the parameter table; lengths in mm.
+inline constexpr int kParamG28Home = 5161;
+inline constexpr int kParamG30Home = 5181;
+inline constexpr int kParamG92Applied = 5210;
+inline constexpr int kParamG92 = 5211;
+inline constexpr int kParamCoordSystem = 5220;
+inline constexpr int kParamWorkOffsets = 5221;  // + 20·(system − 1) + axis
+inline constexpr int kParamTool = 5400;
+inline constexpr int kParamPosition = 5420;
+
+inline int work_param(int system, std::size_t axis) {
+  return kParamWorkOffsets + 20 * (system - 1) + static_cast<int>(axis);
+}
+
 // The words of one block after evaluation (values as written, program units).
 struct Words {
   struct Value {
@@ -131,17 +169,21 @@ struct Loop {
 };
 
 struct Interpreter::Impl final : LiveParameters {
-  Impl(LineReader r, std::string name, const MachineConfig& m, const Options& options);
+  Impl(LineReader r, std::string name, MachineConfig m, const Options& options);
 
   bool next(Block& out);
   bool recover();
 
   // interpreter.cpp
-  void step();                                                 // read and execute one line
-  void parse_words(std::size_t pos);                           // fills words_ from line_.text
+  void step();                        // read and execute one line
+  void parse_words(std::size_t pos);  // fills words_ from line_.text
+  [[noreturn]] void exponent_or_unknown(std::size_t pos, std::size_t value_start,
+                                        char last_letter) const;
   void execute_words();                                        // LinuxCNC order of execution
   void line_motion(const AxisVec& target, std::uint32_t col);  // G0 / G1
   void arc(const AxisVec& target, bool ccw, std::uint32_t col);
+  void emit_arc(const AxisVec& target, Vec2 c, bool ccw, std::uint32_t turns, std::uint32_t col);
+  void arc_spiral(const AxisVec& target, Vec2 c, bool ccw, std::uint32_t turns, std::uint32_t col);
   void emit_motion(BlockKind kind, const AxisVec& target, std::uint32_t col);
   // The move to `target` sweeps lo … hi: an error if that leaves the travel (not while the
   // program continues beyond it after such an error, see recover()).
@@ -157,8 +199,25 @@ struct Interpreter::Impl final : LiveParameters {
     ctx_.fail(col, message);
   }
 
+  // canned_cycles.cpp
+  void canned_cycle(std::uint32_t col);
+  void cycle_move(bool rapid, const AxisVec& target, std::uint32_t col);
+  void cycle_body(std::size_t drill_axis, double r_mm, double bottom_mm, double clear_mm,
+                  std::uint32_t col);
+
+  // tool_offsets.cpp
+  void init_tools(const Options& options);
+  const ToolEntry& tool_entry(double number, std::uint32_t col, const char* what);
+  void select_tool();                      // T
+  void change_tool(const Words::Code& m);  // M6, M61
+  void tool_length(const Words::Code& g);  // G43, G43.1, G43.2, G49
+  void set_tool_data(int l);               // G10 L1, L10, L11
+  bool read_tool_param(int number, double& value) const;
+
   // flow.cpp
-  bool parse_oword(OWord& o) const;  // line_ starts with an O word
+  // line_ starts with an O word. `evaluate`: compute "o[expr] call" labels (only when the line
+  // runs, never while skipping).
+  bool parse_oword(OWord& o, bool evaluate = false) const;
   void execute_oword(const OWord& o);
   OKeyword skip_to(const OWord& from, std::initializer_list<OKeyword> stops, const char* what);
   void skip_fanuc_sub(std::uint32_t def_line);
@@ -168,7 +227,8 @@ struct Interpreter::Impl final : LiveParameters {
   void end_of_file();
   double condition(const OWord& o);
   [[noreturn]] void loop_limit(const Loop& loop) const;
-  void count_iteration(Loop& loop) const;
+  void count_iteration(Loop& loop);
+  void spend(std::uint32_t line, std::uint32_t col);  // one pass of the program's budget
 
   std::string file_;
   MachineConfig machine_;
@@ -186,16 +246,24 @@ struct Interpreter::Impl final : LiveParameters {
   AxisVec travel_target_;
   bool beyond_travel_ = false;
 
+  ToolTable tools_;
+  bool tool_table_given_ = false;    // a table was configured: T of an unlisted tool is an error
+  std::uint32_t selected_tool_ = 0;  // T: the tool the next M6 loads
+  AxisVec tool_offset_{};            // the active tool length offset (G43…), mm / deg
+
   std::vector<Block> out_;  // blocks of the current line, handed out by next()
   std::size_t out_head_ = 0;
   bool finished_ = false;
   bool at_eof_ = false;          // the reader has reached the end of the file
   bool started_ = false;         // some program line has been executed
+  bool produced_ = false;        // some block has been handed out
+  bool main_titled_ = false;     // the main program began with a Fanuc "O1234" line
   bool percent_framed_ = false;  // the program began with a "%" line
 
   std::unordered_map<std::string, SubDef> subs_;
   std::vector<Frame> frames_;
   std::vector<Loop> loops_;
+  std::uint64_t passes_ = 0;  // loop passes and calls so far (max_total_iterations)
 };
 
 }  // namespace cncore::interp

@@ -10,6 +10,23 @@ void ErrorContext::fail(std::uint32_t col, const std::string& message) const {
   throw InputError(file != nullptr ? *file : std::string("<program>"), line, col, message);
 }
 
+std::string printable(std::string_view text) {
+  static constexpr char kHex[] = "0123456789ABCDEF";
+  std::string out;
+  out.reserve(text.size());
+  for (const char ch : text) {
+    const auto u = static_cast<unsigned char>(ch);
+    if (u >= 0x20 && u < 0x7f) {
+      out.push_back(ch);
+    } else {
+      out += "\\x";
+      out.push_back(kHex[u >> 4]);
+      out.push_back(kHex[u & 0xf]);
+    }
+  }
+  return out;
+}
+
 void normalize_line(std::string_view raw, NormLine& out, const ErrorContext& ctx) {
   out.block_delete = false;
   out.percent = false;
@@ -78,7 +95,7 @@ bool scan_number(const NormLine& line, std::size_t& pos, double& value, const Er
   if (i < t.size() && t[i] == '.') {
     std::size_t e = i;
     while (e < t.size() && (is_digit(t[e]) || t[e] == '.')) ++e;
-    ctx.fail(line.col(start), "bad number '" + t.substr(start, e - start) + "'");
+    ctx.fail(line.col(start), "bad number '" + printable(t.substr(start, e - start)) + "'");
   }
   if (!dot && i - start <= 15) {
     // Integers are common (N, G, M, small coordinates); skip the float parser for them.

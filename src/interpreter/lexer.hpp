@@ -38,6 +38,13 @@ void normalize_line(std::string_view raw, NormLine& out, const ErrorContext& ctx
 // A second '.' right after the number is reported as a bad number.
 bool scan_number(const NormLine& line, std::size_t& pos, double& value, const ErrorContext& ctx);
 
+// `text` for an error message: bytes outside printable ASCII (NUL, control characters, UTF-8)
+// are written as \xHH, so the message is one clean line whatever the program holds.
+std::string printable(std::string_view text);
+inline std::string printable(char c) {
+  return printable(std::string_view(&c, 1));
+}
+
 inline bool is_digit(char c) {
   return c >= '0' && c <= '9';
 }

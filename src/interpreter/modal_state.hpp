@@ -10,7 +10,8 @@
 
 namespace cncore::interp {
 
-enum class Motion : std::uint8_t { kNone, kRapid, kLine, kArcCw, kArcCcw };  // G80 G0 G1 G2 G3
+// G80 G0 G1 G2 G3, and a canned cycle (G73 G74 G81…G89: ModalState::cycle holds which).
+enum class Motion : std::uint8_t { kNone, kRapid, kLine, kArcCw, kArcCcw, kCycle };
 
 struct ModalState {
   Motion motion = Motion::kNone;          // group 1 (LinuxCNC starts in G80)
@@ -23,9 +24,18 @@ struct ModalState {
   double tolerance_mm = -1;               // G64 P (mm); < 0: none given
   double smooth_tolerance_mm = -1;        // G64 Q (mm); < 0: none given
 
-  double feed_mm_min = 0;  // F, converted to mm/min when it is read
-  bool feed_set = false;   // an F word has been seen
-  int tool = 0;            // T of the last M6 (tool in the spindle)
+  // Canned cycles: the cycle (ten times its G number), group 10 (G98: retract to the start
+  // height, G99: to R), and the words that stay in force from one cycle block to the next, as
+  // written (program units; R and Z relative in G91).
+  int cycle = 0;
+  bool retract_to_r = false;
+  double cycle_r = 0, cycle_z = 0, cycle_p = 0, cycle_q = 0;
+  bool cycle_r_set = false, cycle_z_set = false;
+
+  double feed_mm_min = 0;      // F, converted to mm/min when it is read
+  bool feed_set = false;       // an F word has been seen
+  int tool = 0;                // T of the last M6 (tool in the spindle)
+  int tool_length_code = 490;  // group 8: G49 (430 G43, 431 G43.1, 432 G43.2)
 
   double length_unit_mm() const { return inch ? 25.4 : 1.0; }
 };

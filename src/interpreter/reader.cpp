@@ -10,10 +10,7 @@ namespace cncore::interp {
 namespace {
 constexpr std::size_t kChunkBytes = 1 << 16;
 
-std::string_view strip_cr(std::string_view s) {
-  if (!s.empty() && s.back() == '\r') s.remove_suffix(1);
-  return s;
-}
+constexpr std::string_view kUtf8Bom = "\xEF\xBB\xBF";
 }  // namespace
 
 LineReader LineReader::open_file(const std::string& path) {
@@ -64,13 +61,27 @@ bool LineReader::fill() {
 
 bool LineReader::next(std::string_view& line) {
   current_ = following_;
+  if (!next_line(line)) return false;
+  // A UTF-8 byte-order mark (editors on Windows write one) is not part of the program.
+  if (current_.offset == 0 && line.substr(0, 3) == kUtf8Bom) line.remove_prefix(3);
+  return true;
+}
+
+// Lines end at "\n", "\r\n" or a lone "\r" (old Mac editors and some controllers).
+bool LineReader::next_line(std::string_view& line) {
   if (in_memory_) {
     const std::size_t pos = following_.offset;
     if (pos >= text_.size()) return false;
-    const std::size_t nl = text_.find('\n', pos);
-    const std::size_t end = nl == std::string::npos ? text_.size() : nl;
-    line = strip_cr(std::string_view(text_).substr(pos, end - pos));
-    following_.offset = nl == std::string::npos ? text_.size() : nl + 1;
+    std::size_t end = text_.find_first_of("\r\n", pos);
+    std::size_t after = end;
+    if (end == std::string::npos) {
+      end = after = text_.size();
+    } else {
+      after = end + 1;
+      if (text_[end] == '\r' && after < text_.size() && text_[after] == '\n') ++after;
+    }
+    line = std::string_view(text_).substr(pos, end - pos);
+    following_.offset = after;
     ++following_.line;
     return true;
   }
@@ -81,17 +92,25 @@ bool LineReader::next(std::string_view& line) {
     if (buf_pos_ >= buf_.size() && !fill()) break;
     const char* begin = buf_.data() + buf_pos_;
     const std::size_t avail = buf_.size() - buf_pos_;
-    const void* nl = std::memchr(begin, '\n', avail);
+    const std::string_view chunk(begin, avail);
+    const std::size_t nl = chunk.find('\n');
+    bool found = nl != std::string_view::npos;
+    std::size_t len = found ? nl : avail;
+    bool cr = false;
+    if (const std::size_t at = chunk.substr(0, len).find('\r'); at != std::string_view::npos) {
+      len = at;
+      found = cr = true;
+    }
     have_any = true;
-    if (nl != nullptr) {
-      const std::size_t len = static_cast<std::size_t>(static_cast<const char*>(nl) - begin);
+    if (found) {
+      // "\r\n" may straddle two chunks: keep the line, then look at the next chunk.
+      const bool at_chunk_end = cr && buf_pos_ + len + 1 >= buf_.size();
+      if (!carry_.empty() || at_chunk_end) carry_.append(begin, len);
       buf_pos_ += len + 1;
-      if (carry_.empty()) {
-        line = strip_cr(std::string_view(begin, len));
-      } else {
-        carry_.append(begin, len);
-        line = strip_cr(carry_);
-      }
+      if (at_chunk_end) fill();
+      if (cr && buf_pos_ < buf_.size() && buf_[buf_pos_] == '\n') ++buf_pos_;
+      line = carry_.empty() ? (at_chunk_end ? std::string_view() : std::string_view(begin, len))
+                            : std::string_view(carry_);
       following_.offset = buf_offset_ + buf_pos_;
       ++following_.line;
       return true;
@@ -100,7 +119,7 @@ bool LineReader::next(std::string_view& line) {
     buf_pos_ += avail;
   }
   if (!have_any || carry_.empty()) return false;
-  line = strip_cr(carry_);
+  line = carry_;
   following_.offset = buf_offset_ + buf_.size();
   ++following_.line;
   return true;

@@ -28,8 +28,8 @@ class LineReader {
   LineReader(const LineReader&) = delete;
   ~LineReader();
 
-  // The next line without its end-of-line characters ("\n", "\r\n"). The view stays valid until
-  // the next call. Returns false at the end of the input.
+  // The next line without its end-of-line characters ("\n", "\r\n", "\r"). The view stays valid
+  // until the next call. Returns false at the end of the input.
   bool next(std::string_view& line);
   // Position of the line last returned by next().
   LinePos current() const { return current_; }
@@ -41,6 +41,7 @@ class LineReader {
  private:
   LineReader() = default;
   bool fill();  // reads the next chunk into buf_; false at end of file
+  bool next_line(std::string_view& line);
 
   std::FILE* file_ = nullptr;
   std::string text_;  // the whole program when reading from memory

@@ -355,6 +355,27 @@ TEST_F(Cli, CheckReportsATravelErrorOnceWithoutKnockOnErrors) {
   EXPECT_NE(lines[2].find("radius to the end"), std::string::npos) << r.err;
 }
 
+TEST_F(Cli, ToolTableFileGivesTheLengthOffsetAndItsErrorsNameTheTable) {
+  write_file(dir_ / "p.ngc", "T2 M6 G43\nG0 Z5\nM30\n");
+  write_file(dir_ / "t.tbl", "T1 P1 Z10 ;short\nT2 P2 Z25 D6 ;long\n");
+  const Result r = run("check p.ngc --blocks --tool-table t.tbl");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("RAPID from 0.0000 0.0000 0.0000 to 0.0000 0.0000 30.0000"),
+            std::string::npos)
+      << r.out;
+  write_file(dir_ / "bad.tbl", "T1 Z1\nT2 Zx\n");
+  const Result b = run("run p.ngc --tool-table bad.tbl --summary s.json");
+  EXPECT_EQ(b.code, 1);
+  EXPECT_EQ(b.err.rfind("bad.tbl:2:4: error: tool table:", 0), 0u) << b.err;
+  EXPECT_FALSE(fs::exists(dir_ / "s.json"));
+  const Result k = run("check p.ngc --canon --tool-table t.tbl");
+  EXPECT_EQ(k.code, 0) << k.err;
+  EXPECT_EQ(k.out, "STRAIGHT_TRAVERSE(0.0000, 0.0000, 5.0000, 0.0000, 0.0000, 0.0000)\n");
+  const Result m = run("check p.ngc --tool-table missing.tbl");
+  EXPECT_EQ(m.code, 1);
+  EXPECT_EQ(m.err.rfind("missing.tbl:0:0: error: cannot open the tool table", 0), 0u) << m.err;
+}
+
 TEST_F(Cli, CheckReportsEveryErrorWithItsLine) {
   // Errors on lines 2 (unknown word), 4 (two motion words) and 6 (division by zero, at the /).
   write_file(dir_ / "many.ngc", "G21 G90 G1 F1000\nX10 E5\nX20\nG0 G1 X30\nX40\nX[1/0]\nM30\n");

@@ -61,6 +61,7 @@ TEST(MachineConfig, PrintedCustomParsesBackEqual) {
   c.bound_resultant_accel = true;
   c.max_loop_iterations = 123456789012;
   c.max_call_depth = 9;
+  c.max_total_iterations = 98765;
   c.table_cancel_mode = TableCancelMode::kRebase;
   c.table_slow_to_fit = true;
   c.axes[kZ].enabled = false;

@@ -1,0 +1,163 @@
+// Tools: T (select), M6 (change), M61 (set the tool number), the tool length offsets G43 H,
+// G43.1 (from the axis words), G43.2 (added), G49, and the tool table writes G10 L1/L10/L11.
+// The table comes from the machine configuration's [[tools]] and the --tool-table file. An
+// offset is applied here, as part of the offset between program and machine coordinates
+// (offset()), so the planner sees machine coordinates of the controlled point.
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "core/error.hpp"
+#include "interpreter/interpreter_impl.hpp"
+
+namespace cncore::interp {
+
+namespace {
+// LinuxCNC: #5400 tool number, #5401…#5409 its offsets X…W, #5410 its diameter.
+constexpr int kParamToolOffsets = 5401;
+constexpr int kParamToolDiameter = 5410;
+}  // namespace
+
+void Interpreter::Impl::init_tools(const Options& options) {
+  for (const ToolSpec& t : machine_.cutting.tools) {
+    ToolEntry e;
+    e.number = t.number;
+    e.offset_mm[kZ] = t.length_mm;
+    e.diameter_mm = t.diameter_mm;
+    tools_[t.number] = e;
+  }
+  for (const auto& [number, entry] : options.tools) tools_[number] = entry;
+  tool_table_given_ = !tools_.empty();
+}
+
+// The entry of tool `number`. Without any table every tool exists, with zero offsets (as in
+// LinuxCNC's rs274 without -t), so programs that only select tools run unchanged.
+const ToolEntry& Interpreter::Impl::tool_entry(double number, std::uint32_t col, const char* what) {
+  if (number < 0 || number != std::floor(number) || number > 1e9) {
+    fail(col, fmt::format("{} must be a tool number (a non-negative integer)", what));
+  }
+  const auto n = static_cast<std::uint32_t>(number);
+  if (auto it = tools_.find(n); it != tools_.end()) return it->second;
+  if (tool_table_given_ && n != 0) {
+    fail(col, fmt::format("tool {} is not in the tool table", n));
+  }
+  ToolEntry& e = tools_[n];
+  e.number = n;
+  return e;
+}
+
+// Step 6: T selects the tool that the next M6 loads.
+void Interpreter::Impl::select_tool() {
+  const Words::Value& t = words_['t'];
+  selected_tool_ = tool_entry(t.value, t.col, "T").number;
+  emit_aux('T', t.value, false);
+}
+
+// Step 8: M6 loads the selected tool; M61 Q sets the tool in the spindle without a change.
+// Neither applies an offset: that is G43's job.
+void Interpreter::Impl::change_tool(const Words::Code& m) {
+  if (m.code10 == 610) {
+    if (!words_.has('q')) fail(m.col, "M61 without Q (tool number)");
+    modal_.tool = static_cast<int>(tool_entry(words_['q'].value, words_['q'].col, "Q").number);
+    selected_tool_ = static_cast<std::uint32_t>(modal_.tool);
+    return;
+  }
+  modal_.tool = static_cast<int>(selected_tool_);
+  emit_aux('M', 6, true);
+}
+
+// Step 18: G43 [H] (the table's offsets of tool H, default the tool in the spindle), G43.1
+// (the offsets from the axis words), G43.2 H / axis words (added to the active offsets), G49.
+void Interpreter::Impl::tool_length(const Words::Code& g) {
+  const Words& w = words_;
+  const double unit = modal_.length_unit_mm();
+  if (w.has('h') && g.code10 != 430 && g.code10 != 432) {
+    fail(w['h'].col, fmt::format("H word with {}", code_text('G', g.code10)));
+  }
+  switch (g.code10) {
+    case 430: {
+      const double h = w.has('h') ? w['h'].value : modal_.tool;
+      tool_offset_.v = tool_entry(h, w.has('h') ? w['h'].col : g.col, "H").offset_mm;
+      break;
+    }
+    case 431:
+    case 432: {
+      AxisVec added{};
+      if (w.has('h')) added.v = tool_entry(w['h'].value, w['h'].col, "H").offset_mm;
+      bool any = w.has('h');
+      for (std::size_t a = 0; a < kMaxAxes; ++a) {
+        const auto& v = w[kAxisWords[a]];
+        if (!v.present) continue;
+        any = true;
+        added[a] += v.value * (is_rotary(a) ? 1.0 : unit);
+      }
+      if (g.code10 == 431) {
+        if (w.has('h')) fail(w['h'].col, "G43.1 takes the offsets from the axis words, not H");
+        if (!any) fail(g.col, "G43.1 without axis words (the offsets)");
+        tool_offset_ = added;
+      } else {
+        if (!any) fail(g.col, "G43.2 without H or axis words");
+        for (std::size_t a = 0; a < kMaxAxes; ++a) tool_offset_[a] += added[a];
+      }
+      break;
+    }
+    default:  // G49
+      tool_offset_ = {};
+      break;
+  }
+  modal_.tool_length_code = g.code10;
+}
+
+// G10 L1 P<tool> [R<radius>] <axes>: the offsets themselves. G10 L10: the offsets that make the
+// current position read the given coordinates (with the active work and G92 offsets);
+// G10 L11: the same with G59.3's offset and no G92. Lengths in program units.
+void Interpreter::Impl::set_tool_data(int l) {
+  const Words& w = words_;
+  const Words::Code* g = w.group(GGroup::kNonModal);
+  if (!w.has('p')) fail(g->col, fmt::format("G10 L{} without P (tool number)", l));
+  const ToolEntry& found = tool_entry(w['p'].value, w['p'].col, "G10 P");
+  ToolEntry e = found;
+  const double unit = modal_.length_unit_mm();
+  if (w.has('r')) {
+    if (w['r'].value < 0) fail(w['r'].col, "G10 R: negative tool radius");
+    e.diameter_mm = 2 * w['r'].value * unit;
+  }
+  for (std::size_t a = 0; a < kMaxAxes; ++a) {
+    const auto& v = w[kAxisWords[a]];
+    if (!v.present) continue;
+    const double value = v.value * (is_rotary(a) ? 1.0 : unit);
+    if (l == 1) {
+      e.offset_mm[a] = value;
+    } else {
+      // pos = value + work + g92 + tool  →  tool = pos − work − g92 − value
+      const int system = l == 10 ? modal_.coord_system : 9;
+      double work = params_.stored(work_param(system, a));
+      if (l == 10 && params_.stored(kParamG92Applied) != 0) {
+        work += params_.stored(kParamG92 + static_cast<int>(a));
+      }
+      e.offset_mm[a] = pos_[a] - work - value;
+    }
+  }
+  tools_[e.number] = e;
+}
+
+bool Interpreter::Impl::read_tool_param(int number, double& value) const {
+  if (number == kParamTool) {
+    value = modal_.tool;
+    return true;
+  }
+  const auto it = tools_.find(static_cast<std::uint32_t>(modal_.tool));
+  if (number >= kParamToolOffsets && number < kParamToolOffsets + static_cast<int>(kMaxAxes)) {
+    const auto a = static_cast<std::size_t>(number - kParamToolOffsets);
+    const double mm = it != tools_.end() ? it->second.offset_mm[a] : 0.0;
+    value = mm / (is_rotary(a) ? 1.0 : modal_.length_unit_mm());
+    return true;
+  }
+  if (number == kParamToolDiameter) {
+    value = (it != tools_.end() ? it->second.diameter_mm : 0.0) / modal_.length_unit_mm();
+    return true;
+  }
+  return false;
+}
+
+}  // namespace cncore::interp

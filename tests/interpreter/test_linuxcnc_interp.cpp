@@ -1,0 +1,201 @@
+// LinuxCNC's own interpreter tests (../shared/testdata/linuxcnc-interp, CNCORE_SHARED_DIR) as
+// the oracle: every case is run through the interpreter and its motion (STRAIGHT_TRAVERSE,
+// STRAIGHT_FEED, ARC_FEED of the canonical listing, CanonPrinter) must match `expected` within
+// 1e-4 program units; a case that LinuxCNC rejects must fail with an InputError. Cases that
+// need an INI file, Python or a plug-in are out of scope. The counts are printed; the cases
+// listed in linuxcnc_interp_passing.txt must keep passing (the list grows as features land).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "config/tool_table.hpp"
+#include "test_machine.hpp"
+
+namespace cncore::interp::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Run {
+  std::string program, tool_table;
+};
+
+struct Case {
+  std::string name;  // relative folder, or bad/<file> and good/<file>
+  fs::path dir;
+  std::vector<Run> runs;
+  fs::path expected;
+  bool must_fail = false;
+  bool in_scope = true;
+};
+
+std::vector<std::vector<double>> motion_lines(const std::string& text) {
+  static const std::regex kCall(R"((STRAIGHT_TRAVERSE|STRAIGHT_FEED|ARC_FEED)\(([^)]*)\))");
+  std::vector<std::vector<double>> out;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), kCall);
+       it != std::sregex_iterator(); ++it) {
+    std::vector<double> v;
+    v.push_back((*it)[1].str() == "STRAIGHT_TRAVERSE" ? 0
+                : (*it)[1].str() == "STRAIGHT_FEED"   ? 1
+                                                      : 2);
+    std::stringstream ss((*it)[2].str());
+    std::string tok;
+    while (std::getline(ss, tok, ',')) v.push_back(std::stod(tok));
+    out.push_back(v);
+  }
+  return out;
+}
+
+// The rs274 invocations of a test.sh: "rs274 … -g PROGRAM … [-t TABLE]".
+Case read_case(const fs::path& dir, const fs::path& root) {
+  Case c;
+  c.dir = dir;
+  c.name = fs::relative(dir, root).string();
+  c.expected = dir / "expected";
+  const std::string sh = read_text((dir / "test.sh").string());
+  c.must_fail = sh.find("! rs274") != std::string::npos;
+  if (sh.find("g++") != std::string::npos) c.in_scope = false;  // builds a program on rs274
+  std::istringstream lines(sh);
+  std::string line;
+  while (std::getline(lines, line)) {
+    const std::size_t at = line.find("rs274 ");
+    if (at == std::string::npos || line.find("-lrs274") != std::string::npos) continue;
+    std::istringstream words(line.substr(at + 6));
+    std::string w;
+    Run r;
+    while (words >> w && w != "|" && w != ">" && w != "2>&1") {
+      if (w == "-i" || w == "-p" || w == "-n") c.in_scope = false;
+      if (w == "-t") {
+        words >> r.tool_table;
+      } else if (w != "-g" && w[0] != '-' && w.find('$') == std::string::npos) {
+        r.program = w;
+      } else if (w.find('$') != std::string::npos) {
+        c.in_scope = false;
+      }
+    }
+    if (!r.program.empty()) c.runs.push_back(r);
+  }
+  if (c.runs.empty()) c.in_scope = false;
+  return c;
+}
+
+std::vector<Case> all_cases() {
+  std::vector<Case> cases;
+  const fs::path root = fs::path(CNCORE_SHARED_DIR) / "testdata" / "linuxcnc-interp";
+  if (!fs::exists(root)) return cases;
+  for (const auto& e : fs::recursive_directory_iterator(root)) {
+    if (e.is_regular_file() && e.path().filename() == "test.sh") {
+      cases.push_back(read_case(e.path().parent_path(), root));
+    }
+  }
+  for (const char* sub : {"bad", "good"}) {
+    for (const auto& e : fs::directory_iterator(root / sub)) {
+      if (e.path().extension() != ".ngc") continue;
+      Case c;
+      c.dir = root / sub;
+      c.name = std::string(sub) + "/" + e.path().filename().string();
+      c.runs.push_back({e.path().filename().string(), ""});
+      c.must_fail = std::string(sub) == "bad";
+      c.expected = e.path().string() + ".expected";
+      cases.push_back(c);
+    }
+  }
+  std::sort(cases.begin(), cases.end(),
+            [](const Case& a, const Case& b) { return a.name < b.name; });
+  return cases;
+}
+
+// rs274 has no machine: no travel limits, and the A B C axes exist.
+MachineConfig unbounded_machine() {
+  MachineConfig m = test_machine();
+  for (std::size_t a = 0; a < kMaxAxes; ++a) {
+    m.axes[a].enabled = true;
+    m.axes[a].rotary = a >= 3;
+    m.axes[a].min_mm = a >= 3 ? 0 : -1e9;
+    m.axes[a].max_mm = a >= 3 ? 0 : 1e9;
+  }
+  return m;
+}
+
+// Runs one case; an empty result means it passed, else why it did not.
+std::string run_case(const Case& c) {
+  const MachineConfig m = unbounded_machine();
+  std::string canon;
+  try {
+    for (const Run& r : c.runs) {
+      Options o;
+      if (!r.tool_table.empty()) o.tools = read_tool_table((c.dir / r.tool_table).string());
+      Interpreter in((c.dir / r.program).string(), m, o);
+      CanonPrinter p;
+      Block b;
+      while (in.next(b)) canon += p.print(b, in.canon_frame());
+    }
+  } catch (const InputError& e) {
+    if (c.must_fail) return {};
+    return "error: " + e.formatted();
+  }
+  if (c.must_fail) return "accepted a program that LinuxCNC rejects";
+  if (!fs::exists(c.expected)) return "no expected output";
+  const auto want = motion_lines(read_text(c.expected.string()));
+  const auto got = motion_lines(canon);
+  for (std::size_t i = 0; i < std::min(want.size(), got.size()); ++i) {
+    bool same = want[i].size() == got[i].size();
+    for (std::size_t k = 0; same && k < want[i].size(); ++k) {
+      same = std::fabs(want[i][k] - got[i][k]) <= 1e-4 + 1e-9;
+    }
+    if (!same) return "motion " + std::to_string(i + 1) + " differs";
+  }
+  if (want.size() != got.size()) {
+    return std::to_string(got.size()) + " motions, LinuxCNC " + std::to_string(want.size());
+  }
+  return {};
+}
+
+std::set<std::string> passing_list() {
+  std::set<std::string> names;
+  std::istringstream in(
+      read_text(std::string(CNCORE_INTERP_TEST_DIR) + "/linuxcnc_interp_passing.txt"));
+  std::string line;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line[0] != '#') names.insert(line);
+  }
+  return names;
+}
+
+TEST(LinuxCncInterp, ListedCasesKeepPassing) {
+  const std::vector<Case> cases = all_cases();
+  if (cases.empty())
+    GTEST_SKIP() << "LinuxCNC interpreter tests not found under " CNCORE_SHARED_DIR;
+  const std::set<std::string> listed = passing_list();
+  std::size_t pass = 0, fail = 0, out_of_scope = 0;
+  for (const Case& c : cases) {
+    if (!c.in_scope) {
+      ++out_of_scope;
+      std::printf("  %-55s out of scope (INI, Python or plug-in)\n", c.name.c_str());
+      continue;
+    }
+    const std::string why = run_case(c);
+    if (why.empty()) {
+      ++pass;
+    } else {
+      ++fail;
+    }
+    std::printf("  %-55s %s\n", c.name.c_str(), why.empty() ? "pass" : ("FAIL " + why).c_str());
+    if (listed.contains(c.name)) {
+      EXPECT_EQ(why, "") << c.name;
+    }
+  }
+  std::printf("linuxcnc-interp: %zu pass, %zu fail, %zu out of scope\n", pass, fail, out_of_scope);
+  for (const std::string& name : listed) {
+    EXPECT_TRUE(
+        std::any_of(cases.begin(), cases.end(), [&](const Case& c) { return c.name == name; }))
+        << name << " is listed but not found";
+  }
+}
+
+}  // namespace
+}  // namespace cncore::interp::test
