@@ -152,6 +152,8 @@ void Interpreter::Impl::exponent_or_unknown(std::size_t pos, std::size_t value_s
   fail(line_.col(pos), "unknown word 'E'");
 }
 
+// Size: one pass over the line's characters, one branch per kind of word (letter, parameter
+// assignment, comment, O-word, error); split, each branch would need the whole scan state.
 void Interpreter::Impl::parse_words(std::size_t pos) {
   Words& w = words_;
   w.clear();
