@@ -129,7 +129,7 @@ int command_run(const RunArgs& a) {
 
   // Adaptive feed control (spec 04): runs in the loop when there is a load source.
   const feed::SelectedLoadSource load = feed::make_load_source(machine, {a.load_csv});
-  // Cutting simulation (issue 7): on with a [stock] section. It is the load source of adaptive
+  // Cutting simulation: on with a [stock] section. It is the load source of adaptive
   // control unless --load names a recorded signal.
   std::optional<cut::CuttingSimulator> cutting;
   if (machine.cutting.stock.enabled) {

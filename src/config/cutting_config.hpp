@@ -1,4 +1,4 @@
-// Cutting-simulation settings (issue 7): the stock box, the tool table, the material and the
+// Cutting-simulation settings: the stock box, the tool table, the material and the
 // spindle. Part of the machine configuration ([stock], [[tools]], [cutting]); the simulation is
 // active when the configuration has a [stock] section.
 #pragma once

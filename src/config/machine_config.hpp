@@ -28,7 +28,7 @@ struct AxisConfig {
 
 // [tables] cancel_mode (spec 02): what SFTCAN does with the accumulated reference shift. The
 // command maps it onto tables::CancelMode (the config library does not depend on the tables).
-// [motion] accdec (issue 9): the acc/dec type of look-ahead mode. The app maps it onto
+// [motion] accdec: the acc/dec type of look-ahead mode. The app maps it onto
 // motion::AccDecType (the config library does not depend on the motion stage).
 enum class AccDecKind : std::uint8_t {
   kMovingAverage,  // "moving_average": the seed's look-ahead + moving average of T cycles
@@ -127,7 +127,7 @@ struct MachineConfig {
   // [direction_correction] (spec 03)
   DirectionCorrectionConfig direction_correction;
 
-  // [stock], [[tools]], [cutting] (cutting simulation, issue 7): active when stock.enabled
+  // [stock], [[tools]], [cutting] (cutting simulation): active when stock.enabled
   CuttingConfig cutting;
 
   // [adaptive], [adaptive.plant] (spec 04): adaptive feed control on spindle load and its plant

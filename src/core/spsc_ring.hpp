@@ -1,4 +1,4 @@
-// A fixed-capacity lock-free single-producer / single-consumer ring (issue 3: the block producer
+// A fixed-capacity lock-free single-producer / single-consumer ring (the block producer
 // thread hands blocks to the motion cycle). One thread calls only try_push, one other thread only
 // try_pop; both are wait-free and never allocate (the slots are allocated and constructed once,
 // in the constructor). Blocking waits belong to the caller (see simulation/run.cpp).

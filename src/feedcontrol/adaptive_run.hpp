@@ -25,7 +25,7 @@ struct SelectedLoadSource {
 
 // The one place that picks the load source, in this order: --load FILE.csv (RecordedLoad; a
 // bad file throws InputError at its line), [adaptive.plant] with a depth profile (PlantLoad),
-// else none. (The cutting simulation of issue 7 is added here.)
+// else none. (The cutting simulation is added here.)
 SelectedLoadSource make_load_source(const MachineConfig& machine, const LoadSourceOptions& options);
 
 // The adaptive loop as the run's cycle controller. Every cycle: a sample carrying M52 switches

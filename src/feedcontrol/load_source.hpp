@@ -1,5 +1,5 @@
 // Spindle-load sources for adaptive feed control (spec 04): a recorded signal (CSV against time
-// or path distance) and a plant model. The cutting simulation (issue 7) implements the same
+// or path distance) and a plant model. The cutting simulation implements the same
 // interface. load_pct() is called once per interpolation cycle: no allocation, no exceptions.
 #pragma once
 

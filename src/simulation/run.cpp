@@ -350,7 +350,7 @@ RunCounts run_cycles(Source& source, const std::string& program_path, const Mach
   };
   // One interpolation period. The k-th sample (k = 0, 1, ...) has t = k·τ; an override step at
   // time T is set before the first cycle with t >= T, since set_override acts on the next cycle.
-  // Samples of consecutive cycles are handed to the observers in batches (issue 3: the kernel's
+  // Samples of consecutive cycles are handed to the observers in batches (the kernel's
   // cycles in one tight loop, then the observers', overlap better on the CPU than one cycle of
   // each in turn). Each observer sees exactly the same samples and blocks in the same order: a
   // batch is delivered (to each observer in one on_samples call, one observer after the other)

@@ -55,7 +55,7 @@ struct RunOptions {
   // When set, it decides the kernel's override every cycle; the override steps then only set
   // the operator's override it is given. Not owned.
   CycleController* cycle_controller = nullptr;
-  // Issue 3: interpret the program (interpreter + direction correction) on a producer thread
+  // Interpret the program (interpreter + direction correction) on a producer thread
   // that hands the blocks to the motion cycle through a lock-free ring of `ring_blocks` blocks
   // (a power of two). The samples are bit-identical either way: the cycle takes exactly the
   // same blocks at exactly the same cycles, and waits for the producer rather than run short.

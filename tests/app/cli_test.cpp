@@ -548,7 +548,7 @@ TEST_F(Cli, SummaryNamesTheAccDecType) {
   EXPECT_EQ(jm.at("accdec"), "moving_average");
   EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "s.json")).at("accdec"), "moving_average");
   EXPECT_LT(jd.at("cycle_time_s").get<double>(), jm.at("cycle_time_s").get<double>());
-  // The search type (issue 9): named, from the option and from the machine's key; no slower
+  // The search type: named, from the option and from the machine's key; no slower
   // than the acceleration type on this example; refused with a jerk limit (usage error).
   ASSERT_EQ(run("run " + p + " --accdec search --summary q.json").code, 0);
   const auto jq = nlohmann::json::parse(slurp(dir_ / "q.json"));

@@ -1,4 +1,4 @@
-// `cncore run` with the cutting simulation (issue 7): outputs (PNG, grid, load column, summary
+// `cncore run` with the cutting simulation: outputs (PNG, grid, load column, summary
 // keys), errors (tool not in the table, stock box, --heightmap without a stock) leave no files,
 // and adaptive feed on the simulated cut of a real corpus program reports the time saved.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Numeric edge cases (issue 8), through the public APIs only (interpreter, sim::run_program):
+// Numeric edge cases, through the public APIs only (interpreter, sim::run_program):
 // zero-length moves, arcs with a radius near zero and near the travel size, 179.9° and 0.001°
 // corners, coordinates of 1e6 mm, a feed of 1e-6 mm/min, and a program of millions of blocks at
 // flat memory. Each test checks an outcome measured on the produced samples (end point, finite

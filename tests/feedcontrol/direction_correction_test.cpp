@@ -166,7 +166,7 @@ TEST(DirectionCorrection, ReplaceModeIgnoresTheOverride) {
   EXPECT_TRUE(r.ok()) << r.summary();
 }
 
-// The second acc/dec type (issue 9, constant acceleration before interpolation): the correction
+// The acceleration acc/dec type (constant acceleration before interpolation): the correction
 // is in the commanded feed, so it holds there too, in both override modes.
 TEST(DirectionCorrection, AccelerationLimitedAccDecToo) {
   const std::string p = program_file("slopes_acc.ngc", kSlopes);

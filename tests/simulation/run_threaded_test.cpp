@@ -1,4 +1,4 @@
-// Issue 3: run_program with the program interpreted on a producer thread gives exactly the
+// run_program with the program interpreted on a producer thread gives exactly the
 // single-thread run: the same samples bit for bit, the same blocks announced after the same
 // number of samples, the same counts, the same error at the same point. Small rings and small
 // look-ahead buffers make both sides wait on each other often.

@@ -1,4 +1,4 @@
-// The cutting simulation (issue 7): the stock height map lowered by the tool every interpolation
+// The cutting simulation: the stock height map lowered by the tool every interpolation
 // cycle, the material-removal rate and the spindle load that follows from it. It observes the
 // samples of a run (the tool position, T / M6 events) and is a spindle-load source for adaptive
 // feed control (spec 04).
