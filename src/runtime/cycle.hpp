@@ -73,9 +73,8 @@ class CycleLoop {
   std::size_t home_count_ = 0, home_index_ = 0;
   HomePhase home_phase_ = HomePhase::kSearch;
   double speed_mm_s_ = 0;
-  bool rapid_set_ = false;
-  const std::atomic<bool>* stopping_ =
-      nullptr;  // a rapid override was given: rapids no longer follow the feed's
+  bool rapid_set_ = false;  // a rapid override was given: rapids no longer follow the feed's
+  const std::atomic<bool>* stopping_ = nullptr;  // the controller is stopping (see set_stopping)
 };
 
 }  // namespace cncore::runtime
