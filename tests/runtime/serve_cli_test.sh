@@ -35,8 +35,8 @@ console)
   grep -q '"position"' "$tmp/state/machine-state.json" || fail "no state saved"
   grep -q 'cncore-machine-state-1' "$tmp/state/machine-state.json" || fail "state file format"
   # Reserved front ends say so (usage error, exit 2).
-  "$cncore" serve --no-state --grbl-tcp 127.0.0.1:2323 </dev/null >/dev/null 2>&1
-  [ $? -eq 2 ] || fail "--grbl-tcp should be a usage error for now"
+  "$cncore" serve --no-state --http 127.0.0.1:8080 </dev/null >/dev/null 2>&1
+  [ $? -eq 2 ] || fail "--http should be a usage error for now"
   echo "console: ok"
   ;;
 udp|shm)
