@@ -18,8 +18,7 @@ int alarm_number(runtime::AlarmCode alarm) {
       return 1;  // position lost, like a hard limit
     case runtime::AlarmCode::kSoftLimit:
       return 2;
-    case runtime::AlarmCode::kPlannerLost:
-      return 3;  // motion stopped abruptly
+    case runtime::AlarmCode::kPlannerLost:  // motion stopped abruptly
     case runtime::AlarmCode::kProgramError:
       return 3;
     case runtime::AlarmCode::kHomingFailed:

@@ -82,9 +82,7 @@ std::optional<int> Settings::write(int n, double value) {
     if (value != *fixed) return 3;
   } else if (n == 10) {
     if (value < 0 || value > 3) return 3;
-  } else if (!without_effect(n) && value <= 0) {
-    return 4;
-  } else if (value < 0) {
+  } else if (without_effect(n) ? value < 0 : value <= 0) {
     return 4;
   }
   values_[n] = value;
