@@ -1,12 +1,16 @@
-// `cncore serve`: the controller process (src/runtime) with its text console on standard input.
+// `cncore serve`: the controller process (src/runtime) with its text console on standard input
+// and, when asked, the Grbl 1.1 endpoints (src/grbl) for senders.
 #include <poll.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <csignal>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -14,6 +18,7 @@
 #include "app/cli_common.hpp"
 #include "app/commands.hpp"
 #include "app/serve_console.hpp"
+#include "grbl/endpoint.hpp"
 #include "io/trajectory_csv.hpp"
 #include "runtime/control.hpp"
 #include "runtime/persist.hpp"
@@ -99,6 +104,22 @@ class TrajectoryRecorder {
   std::thread thread_;
 };
 
+// The Grbl settings: the machine's values, overridden by those a sender wrote before (grbl.json
+// in the state folder); they are put into the machine before the controller starts.
+void load_grbl_settings(grbl::SettingsStore& store, MachineConfig& machine,
+                        const std::string& state_dir) {
+  store.settings = grbl::Settings::from_machine(machine);
+  if (state_dir.empty()) return;
+  std::filesystem::create_directories(state_dir);
+  store.path = state_dir + "/grbl.json";
+  std::ifstream f(store.path);
+  if (!f) return;
+  std::stringstream text;
+  text << f.rdbuf();
+  store.settings.merge_json(text.str());
+  store.settings.apply(machine);
+}
+
 void print_messages(runtime::Controller& c) {
   while (auto m = c.take_message()) std::cout << "msg: " << *m << "\n";
   std::cout.flush();
@@ -107,17 +128,17 @@ void print_messages(runtime::Controller& c) {
 }  // namespace
 
 int command_serve(const ServeArgs& a) {
-  for (const auto& [option, value] :
-       {std::pair{"--grbl-tcp", &a.grbl_tcp}, std::pair{"--grbl-pty", &a.grbl_pty},
-        std::pair{"--http", &a.http}}) {
-    if (!value->empty()) {
-      throw UsageError(std::string(option) + ": this front end is not part of cncore yet; " +
-                       "drive the controller from standard input (docs/runtime.md)");
-    }
+  if (!a.http.empty()) {
+    throw UsageError(
+        "--http: this front end is not part of cncore yet; drive the controller "
+        "from standard input or a Grbl sender (docs/runtime.md)");
   }
-  const MachineConfig machine = machine_from(a.machine);
+  MachineConfig machine = machine_from(a.machine);
   const runtime::ControllerOptions options = controller_options(a);
   if (!a.program.empty()) require_readable(a.program);
+  grbl::SharedSettings grbl_settings;
+  const bool grbl = !a.grbl_tcp.empty() || !a.grbl_pty.empty();
+  if (grbl) load_grbl_settings(grbl_settings.store, machine, options.state_dir);
   install_stop_handlers();
   runtime::Controller controller(machine, options);
   std::unique_ptr<TrajectoryRecorder> recorder;
@@ -135,8 +156,20 @@ int command_serve(const ServeArgs& a) {
     shdr->set_program(a.program);
     std::cout << "mtconnect SHDR on port " << shdr->port() << "\n";
   }
+  std::vector<std::unique_ptr<grbl::Endpoint>> endpoints;
+  try {
+    if (!a.grbl_tcp.empty()) {
+      endpoints.push_back(grbl::Endpoint::tcp(controller, grbl_settings, a.grbl_tcp));
+    }
+    if (!a.grbl_pty.empty()) {
+      endpoints.push_back(grbl::Endpoint::pty(controller, grbl_settings, a.grbl_pty));
+    }
+  } catch (const std::runtime_error& e) {
+    throw UsageError(e.what());
+  }
   std::cout << "cncore serve: " << machine.name << ", period " << machine.period_s * 1000
             << " ms, servo " << a.servo << "; commands on stdin\n";
+  for (const auto& e : endpoints) std::cout << e->description() << "\n";
   if (!a.program.empty()) {
     const runtime::Result r = controller.load_program(a.program);
     if (!r.ok) throw UsageError("--program: " + r.error);
@@ -171,6 +204,7 @@ int command_serve(const ServeArgs& a) {
     }
     print_messages(controller);
   }
+  endpoints.clear();  // no sender acts during the stop
   if (recorder) {
     // The controlled stop happens in the controller's destructor; record it too.
     controller.reset();

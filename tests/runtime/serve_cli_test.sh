@@ -38,8 +38,8 @@ console)
   head -1 "$tmp/served.csv" | grep -q '^t,line,x,y,z,feed' || fail "trajectory header"
   [ "$(wc -l <"$tmp/served.csv")" -gt 1000 ] || fail "trajectory too short"
   # Reserved front ends say so (usage error, exit 2).
-  "$cncore" serve --no-state --grbl-tcp 127.0.0.1:2323 </dev/null >/dev/null 2>&1
-  [ $? -eq 2 ] || fail "--grbl-tcp should be a usage error for now"
+  "$cncore" serve --no-state --http 127.0.0.1:8080 </dev/null >/dev/null 2>&1
+  [ $? -eq 2 ] || fail "--http should be a usage error for now"
   echo "console: ok"
   ;;
 udp|shm)
