@@ -6,6 +6,8 @@
 #include <nlohmann/json.hpp>
 #include <numeric>
 
+#include "io/report_page.hpp"
+
 namespace cncore::app::estimate {
 namespace {
 
@@ -18,27 +20,7 @@ std::string csv_field(const std::string& s) {
 }
 
 std::string escape_html(const std::string& s) {
-  std::string o;
-  o.reserve(s.size());
-  for (const char c : s) {
-    switch (c) {
-      case '&':
-        o += "&amp;";
-        break;
-      case '<':
-        o += "&lt;";
-        break;
-      case '>':
-        o += "&gt;";
-        break;
-      case '"':
-        o += "&quot;";
-        break;
-      default:
-        o += c;
-    }
-  }
-  return o;
+  return io::page::html_escape(s);
 }
 
 std::string line_range(const SlowLine& l) {

@@ -1,7 +1,7 @@
-// Pieces the HTML pages of `cncore run --report` and `cncore table --report` share (src/io only):
-// escaping, number arrays for the page's data, the page head with the inlined chart library and
-// the error hooks, and the script that draws uPlot charts and records for the browser test how
-// many canvases were drawn on.
+// Pieces the HTML pages of `cncore run --report`, `cncore table --report` and
+// `cncore estimate --report` share: escaping, number arrays for the page's data, the page head
+// with the inlined chart library and the error hooks, and the script that draws uPlot charts and
+// records for the browser test how many canvases were drawn on.
 #pragma once
 
 #include <cmath>

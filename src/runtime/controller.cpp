@@ -214,6 +214,15 @@ struct Controller::Impl {
     return {};
   }
 
+  // A command without data: refused with the table's reason when `check` and it is illegal now.
+  Result command(Command c, bool check) {
+    const std::lock_guard lock(control);
+    if (check) {
+      if (Result r = allowed(c); !r.ok) return r;
+    }
+    return send(cycle_command(c));
+  }
+
   MachineConfig machine_at(const Status& st) const {
     MachineConfig m = machine;
     m.start_position = st.commanded.v;
@@ -418,25 +427,19 @@ Result Controller::mdi(const std::string& line) {
 }
 
 Result Controller::feed_hold() {
-  const std::lock_guard lock(impl_->control);
-  if (Result r = impl_->allowed(Command::kHold); !r.ok) return r;
-  return impl_->send(cycle_command(Command::kHold));
+  return impl_->command(Command::kHold, true);
 }
 
 Result Controller::reset() {
-  const std::lock_guard lock(impl_->control);
-  return impl_->send(cycle_command(Command::kReset));
+  return impl_->command(Command::kReset, false);
 }
 
 Result Controller::estop() {
-  const std::lock_guard lock(impl_->control);
-  return impl_->send(cycle_command(Command::kEStop));
+  return impl_->command(Command::kEStop, false);
 }
 
 Result Controller::clear_alarm() {
-  const std::lock_guard lock(impl_->control);
-  if (Result r = impl_->allowed(Command::kClearAlarm); !r.ok) return r;
-  return impl_->send(cycle_command(Command::kClearAlarm));
+  return impl_->command(Command::kClearAlarm, true);
 }
 
 Result Controller::jog(const JogRequest& request) {
@@ -460,14 +463,11 @@ Result Controller::jog(const JogRequest& request) {
 }
 
 Result Controller::jog_cancel() {
-  const std::lock_guard lock(impl_->control);
-  return impl_->send(cycle_command(Command::kJogCancel));
+  return impl_->command(Command::kJogCancel, false);
 }
 
 Result Controller::home() {
-  const std::lock_guard lock(impl_->control);
-  if (Result r = impl_->allowed(Command::kHome); !r.ok) return r;
-  return impl_->send(cycle_command(Command::kHome));
+  return impl_->command(Command::kHome, true);
 }
 
 Result Controller::set_feed_override(double pct) {
@@ -498,10 +498,7 @@ Result Controller::set_switches(const Switches& switches) {
 }
 
 Result Controller::set_check_mode(bool on) {
-  const std::lock_guard lock(impl_->control);
-  const Command c = on ? Command::kCheckOn : Command::kCheckOff;
-  if (Result r = impl_->allowed(c); !r.ok) return r;
-  return impl_->send(cycle_command(c));
+  return impl_->command(on ? Command::kCheckOn : Command::kCheckOff, true);
 }
 
 std::size_t Controller::read_samples(std::span<motion::Sample> out) {

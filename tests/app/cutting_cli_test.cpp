@@ -192,7 +192,7 @@ TEST_F(CuttingCli, ToolNotInTheTableIsAnErrorAtItsLineAndWritesNothing) {
   const Result r = run("run bad.ngc --machine mill.toml --heightmap top.png --summary s.json");
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_NE(r.err.find("bad.ngc:5:"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("T7"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("tool 7"), std::string::npos) << r.err;
   EXPECT_EQ(files(), before);
 }
 

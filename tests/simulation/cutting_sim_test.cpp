@@ -278,7 +278,7 @@ TEST(CuttingSimErrors, ToolNumberNotInTheTableNamesTheLine) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.file(), p);
     EXPECT_EQ(e.line(), 5u) << e.formatted();
-    EXPECT_NE(std::string(e.what()).find("T7"), std::string::npos) << e.formatted();
+    EXPECT_NE(std::string(e.what()).find("tool 7"), std::string::npos) << e.formatted();
   }
 }
 

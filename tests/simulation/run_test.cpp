@@ -247,8 +247,12 @@ TEST(RunProgram, MergedPiecesRunAsTheLinesTheyDescribe) {
   run_program(program_file("lines.ngc", lines + "M2\n"), m, {}, {&whole});
   const RunCounts n = run_program(program_file("pieces.ngc", pieces + "M2\n"), m, {}, {&merged});
   EXPECT_EQ(n.blocks, 400u);  // the program's blocks, not the kernel's
-  // 4 lines of 100 pieces, and M2.
-  EXPECT_EQ(merged.blocks.size(), 4 + 1u);
+  // 4 lines of 100 pieces, and M2 (each merged line is followed by its programmed pieces, which
+  // observers see for the lines they name).
+  const auto ran = std::count_if(merged.blocks.begin(), merged.blocks.end(),
+                                 [](const Block& b) { return !b.piece; });
+  EXPECT_EQ(ran, 4 + 1);
+  EXPECT_EQ(merged.blocks.size(), 4 + 1 + 400u);
   ASSERT_EQ(merged.samples.size(), whole.samples.size());
   for (std::size_t i = 0; i < merged.samples.size(); ++i) {
     ASSERT_LE(norm(merged.samples[i].position.xyz() - whole.samples[i].position.xyz()), 1e-6)
