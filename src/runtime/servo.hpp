@@ -47,8 +47,9 @@ struct ShmRingHeader {
 };
 
 // The simulated axes: per axis, velocity = ff·(commanded velocity over the period) + kp·(the
-// error at its start), integrated every period. Switches sit at each axis's travel maximum in the axes' true
-// position, which differs from the controller's by `position_error` until homing finds it.
+// error at its start), integrated every period. Switches sit at each axis's travel maximum in the
+// axes' true position, which differs from the controller's by `position_error` until homing finds
+// it.
 class SimAxes {
  public:
   SimAxes(const MachineConfig& machine, const AxisVec& start, const AxisVec& position_error);

@@ -151,11 +151,10 @@ TEST_F(ReportBrowser, ChartsRenderWithoutErrorsAndShowTheRunsFigures) {
 TEST_F(ReportBrowser, TableReportChartsRenderWithoutErrors) {
   const fs::path html = dir_ / "fig6.html";
   const std::string tables = std::string(CNCORE_SOURCE_DIR) + "/examples/tables/";
-  const std::string run = quote(CNCORE_BIN) + " table " + quote(tables + "fig6-x.tbl") + " " +
-                          quote(tables + "fig6-z.tbl") +
-                          " --machine " + quote(tables + "lathe.toml") +
-                          " --var 501=0 --var 502=0 --var 503=0 --report " + quote(html.string()) +
-                          " > /dev/null 2>&1";
+  const std::string run =
+      quote(CNCORE_BIN) + " table " + quote(tables + "fig6-x.tbl") + " " +
+      quote(tables + "fig6-z.tbl") + " --machine " + quote(tables + "lathe.toml") +
+      " --var 501=0 --var 502=0 --var 503=0 --report " + quote(html.string()) + " > /dev/null 2>&1";
   ASSERT_EQ(shell(run), 0) << run;
   const std::string dom = dom_of(html);
   ASSERT_FALSE(dom.empty()) << log_;
