@@ -21,7 +21,7 @@ namespace {
 
 // A fine-segment program (a sine of 0.05 mm chords, to and fro) for the loaded phase.
 std::string write_default_program() {
-  const std::string path =
+  std::string path =
       (std::filesystem::temp_directory_path() / fmt::format("cncore-latency-{}.ngc", ::getpid()))
           .string();
   std::ofstream out(path);

@@ -7,6 +7,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <thread>
+#include <utility>
 
 #include "core/error.hpp"
 #include "interpreter/interpreter.hpp"
@@ -44,8 +45,8 @@ bool is_moving(MachineState s) {
 }  // namespace
 
 struct Controller::Impl {
-  Impl(const MachineConfig& m, const ControllerOptions& o)
-      : machine(m), options(o), commands(256), applied(4096), state_dir(o.state_dir) {
+  Impl(MachineConfig m, const ControllerOptions& o)
+      : machine(std::move(m)), options(o), commands(256), applied(4096), state_dir(o.state_dir) {
     if (machine.servo.kp_per_s * machine.period_s > 1) {
       throw std::runtime_error("servo.kp_per_s · motion.period_s must be ≤ 1 for a stable loop");
     }

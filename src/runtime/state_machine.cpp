@@ -24,11 +24,7 @@ Transition from_idle(Command c) {
       return to(MachineState::kCheck);
     case Command::kResume:
       return refuse("nothing to resume: the machine is idle");
-    case Command::kHold:
-    case Command::kJogCancel:
-    case Command::kCheckOff:
-      return to(MachineState::kIdle);  // harmless: nothing happens
-    default:
+    default:  // hold, jog cancel, check off, reset, unlock: harmless, nothing happens
       return to(MachineState::kIdle);
   }
 }
@@ -37,16 +33,6 @@ Transition from_run(Command c) {
   switch (c) {
     case Command::kHold:
       return to(MachineState::kHold);
-    case Command::kReset:
-      return to(MachineState::kRun);  // stops on the path, then Idle
-    case Command::kResume:
-      return to(MachineState::kRun);
-    case Command::kStart:
-      return to(MachineState::kRun);  // already running
-    case Command::kFeedOverride:
-    case Command::kRapidOverride:
-    case Command::kSwitches:
-      return to(MachineState::kRun);
     case Command::kLoad:
       return refuse("a program is running: reset or wait for its end");
     case Command::kMdi:
@@ -57,7 +43,7 @@ Transition from_run(Command c) {
       return refuse("a program is running: no homing");
     case Command::kCheckOn:
       return refuse("a program is running: check mode waits until it ends");
-    default:
+    default:  // reset (stops on the path, then Idle), start (already running), overrides
       return to(MachineState::kRun);
   }
 }
@@ -67,20 +53,13 @@ Transition from_hold(Command c) {
     case Command::kResume:
     case Command::kStart:
       return to(MachineState::kRun);
-    case Command::kReset:
-      return to(MachineState::kHold);  // then Idle
-    case Command::kHold:
-    case Command::kFeedOverride:
-    case Command::kRapidOverride:
-    case Command::kSwitches:
-      return to(MachineState::kHold);
     case Command::kLoad:
     case Command::kMdi:
     case Command::kJog:
     case Command::kHome:
     case Command::kCheckOn:
       return refuse("the program is held: resume it or reset first");
-    default:
+    default:  // reset (then Idle), hold, overrides, switches
       return to(MachineState::kHold);
   }
 }
