@@ -19,7 +19,7 @@ namespace cncore::grbl {
 
 namespace {
 
-constexpr int kPollMs = 2;  // how often a session looks at the machine while a sender is there
+constexpr int kPollMs = 2;  // how often a connection looks at the machine while a sender is there
 constexpr std::size_t kReadAhead = 4 * kRxBufferBytes;  // beyond this, the kernel's buffers wait
 
 std::runtime_error sys_error(const std::string& what) {
@@ -124,16 +124,16 @@ bool Endpoint::serve(int fd, bool readable) {
   bool alive = true;
   {
     const std::lock_guard lock(shared_.mutex);
-    if (readable && session_->buffered_bytes() < kReadAhead) {
+    if (readable && connection_->buffered_bytes() < kReadAhead) {
       char buf[512];
       const ssize_t n = ::read(fd, buf, sizeof buf);
       if (n > 0) {
-        session_->receive(std::string_view(buf, static_cast<std::size_t>(n)), out);
+        connection_->receive(std::string_view(buf, static_cast<std::size_t>(n)), out);
       } else if (n == 0 || (errno != EAGAIN && errno != EINTR)) {
         alive = false;
       }
     } else {
-      session_->poll(out);
+      connection_->poll(out);
     }
   }
   if (!out.empty() && !write_all(fd, out)) alive = false;
@@ -144,7 +144,7 @@ void Endpoint::run_tcp() {
   int client = -1;
   while (!stop_.load()) {
     pollfd p[2] = {{listen_fd_, POLLIN, 0}, {client, POLLIN, 0}};
-    const bool room = session_ && session_->buffered_bytes() < kReadAhead;
+    const bool room = connection_ && connection_->buffered_bytes() < kReadAhead;
     if (!room) p[1].events = 0;
     const int rc = ::poll(p, client >= 0 ? 2 : 1, client >= 0 ? kPollMs : 50);
     if (rc < 0 && errno != EINTR) break;
@@ -166,8 +166,8 @@ void Endpoint::run_tcp() {
         std::string out;
         {
           const std::lock_guard lock(shared_.mutex);
-          session_ = std::make_unique<Session>(controller_, shared_.store);
-          session_->connect(out);
+          connection_ = std::make_unique<Connection>(controller_, shared_.store);
+          connection_->connect(out);
         }
         if (!write_all(client, out)) {
           ::close(client);
@@ -184,7 +184,7 @@ void Endpoint::run_pty() {
   bool connected = false;
   while (!stop_.load()) {
     pollfd p{master_fd_, POLLIN, 0};
-    const bool room = session_ && session_->buffered_bytes() < kReadAhead;
+    const bool room = connection_ && connection_->buffered_bytes() < kReadAhead;
     if (connected && !room) p.events = 0;
     const int rc = ::poll(&p, 1, connected ? kPollMs : 20);
     if (rc < 0 && errno != EINTR) break;
@@ -199,8 +199,8 @@ void Endpoint::run_pty() {
       std::string out;
       {
         const std::lock_guard lock(shared_.mutex);
-        session_ = std::make_unique<Session>(controller_, shared_.store);
-        session_->connect(out);
+        connection_ = std::make_unique<Connection>(controller_, shared_.store);
+        connection_->connect(out);
       }
       (void)write_all(master_fd_, out);
     }

@@ -1,7 +1,7 @@
 // The transports of the Grbl endpoint: a TCP listener on loopback (`--grbl-tcp 127.0.0.1:2323`,
 // like grblHAL's network streaming) and a pseudo-terminal whose slave is linked at a path
-// (`--grbl-pty PATH`, for senders that open a serial port). Each runs one Session on its own
-// thread; the sessions of one process share the settings (and their lock).
+// (`--grbl-pty PATH`, for senders that open a serial port). Each runs one Connection on its own
+// thread; the connections of one process share the settings (and their lock).
 #pragma once
 
 #include <atomic>
@@ -10,14 +10,14 @@
 #include <string>
 #include <thread>
 
-#include "grbl/session.hpp"
+#include "grbl/connection.hpp"
 #include "runtime/control.hpp"
 
 namespace cncore::grbl {
 
 struct SharedSettings {
   SettingsStore store;
-  std::mutex mutex;  // held while a session runs (the sessions of both endpoints)
+  std::mutex mutex;  // held while a connection runs (the connections of both endpoints)
 };
 
 class Endpoint {
@@ -37,14 +37,14 @@ class Endpoint {
   Endpoint(runtime::Controller& c, SharedSettings& s) : controller_(c), shared_(s) {}
   void run_tcp();
   void run_pty();
-  // Reads what the client sent (bounded by the session's buffer), runs the session, writes the
-  // replies. False: the client is gone.
+  // Reads what the client sent (bounded by the connection's buffer), runs the connection, writes
+  // the replies. False: the client is gone.
   bool serve(int fd, bool readable);
   bool write_all(int fd, const std::string& text) const;
 
   runtime::Controller& controller_;
   SharedSettings& shared_;
-  std::unique_ptr<Session> session_;
+  std::unique_ptr<Connection> connection_;
   int listen_fd_ = -1;
   int master_fd_ = -1;
   std::string link_path_;

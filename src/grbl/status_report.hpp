@@ -9,7 +9,7 @@
 
 namespace cncore::grbl {
 
-// What the report needs beyond runtime::Status: the session's own state.
+// What the report needs beyond runtime::Status: the connection's own state.
 struct ReportInputs {
   bool door = false;       // safety door opened (0x84), not yet resumed
   bool sleep = false;      // $SLP

@@ -1,7 +1,7 @@
 // The Grbl 1.1 protocol for one connected sender, without sockets: bytes in, reply text out,
 // commands to runtime::Controller. The transports (endpoint.hpp) only move bytes.
 //
-// What a Grbl board does and this session reproduces:
+// What a Grbl board does and this connection reproduces:
 // - real-time bytes (? ! ~ 0x18 0x84 0x85 0x90–0x9D) are taken out of the stream wherever they
 //   appear and acted on at once, also when the receive buffer is full;
 // - the other bytes form lines in a 128-byte receive buffer (what character-counting senders
@@ -26,16 +26,16 @@ inline constexpr std::size_t kRxBufferBytes = 128;  // Grbl's serial receive buf
 inline constexpr std::size_t kLineBytes = 256;      // longest line (grblHAL's line buffer)
 inline constexpr int kPlannerBlocks = 15;           // reported as the planner's capacity (Bf:)
 
-// Settings and startup lines shared by the sessions of one process, with where they persist.
+// Settings and startup lines shared by the connections of one process, with where they persist.
 struct SettingsStore {
   Settings settings;
   std::string path;   // the state folder's grbl.json; empty: not kept
   void save() const;  // temp file + rename
 };
 
-class Session {
+class Connection {
  public:
-  Session(runtime::Controller& controller, SettingsStore& store);
+  Connection(runtime::Controller& controller, SettingsStore& store);
 
   // A sender connected: the welcome line (and the startup lines once the machine is idle).
   void connect(std::string& out);

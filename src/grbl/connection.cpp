@@ -1,4 +1,4 @@
-#include "grbl/session.hpp"
+#include "grbl/connection.hpp"
 
 #include <fmt/format.h>
 
@@ -64,10 +64,10 @@ void SettingsStore::save() const {
   std::rename(temp.c_str(), path.c_str());
 }
 
-Session::Session(runtime::Controller& controller, SettingsStore& store)
+Connection::Connection(runtime::Controller& controller, SettingsStore& store)
     : controller_(controller), store_(store) {}
 
-void Session::connect(std::string& out) {
+void Connection::connect(std::string& out) {
   out += "\r\n";
   line_out(out, kWelcome);
   last_alarm_ = controller_.status().alarm;
@@ -77,7 +77,7 @@ void Session::connect(std::string& out) {
   startup_due_ = true;
 }
 
-void Session::receive(std::string_view bytes, std::string& out) {
+void Connection::receive(std::string_view bytes, std::string& out) {
   for (const char ch : bytes) {
     const auto b = static_cast<unsigned char>(ch);
     if (b == '?' || b == '!' || b == '~' || b >= 0x80 || b == kSoftReset) {
@@ -93,7 +93,7 @@ void Session::receive(std::string_view bytes, std::string& out) {
   poll(out);
 }
 
-void Session::realtime(unsigned char b, std::string& out) {
+void Connection::realtime(unsigned char b, std::string& out) {
   const runtime::Status s = controller_.status();
   switch (b) {
     case '?':
@@ -124,7 +124,7 @@ void Session::realtime(unsigned char b, std::string& out) {
   }
 }
 
-void Session::overrides(unsigned char b) {
+void Connection::overrides(unsigned char b) {
   const runtime::Status s = controller_.status();
   const double max_feed = controller_.machine().max_override_pct;
   auto feed = [&](double pct) {
@@ -176,7 +176,7 @@ void Session::overrides(unsigned char b) {
   }
 }
 
-void Session::soft_reset(std::string& out) {
+void Connection::soft_reset(std::string& out) {
   const runtime::Status s = controller_.status();
   if (moving(s.state)) (void)controller_.reset();
   if (s.state == MachineState::kCheck) (void)controller_.set_check_mode(false);
@@ -186,7 +186,7 @@ void Session::soft_reset(std::string& out) {
   connect(out);
 }
 
-void Session::poll(std::string& out) {
+void Connection::poll(std::string& out) {
   const runtime::Status s = controller_.status();
   if (s.alarm != last_alarm_) {
     last_alarm_ = s.alarm;
@@ -211,7 +211,7 @@ void Session::poll(std::string& out) {
   }
 }
 
-void Session::run_startup(std::string& out) {
+void Connection::run_startup(std::string& out) {
   startup_due_ = false;
   for (const std::string& line : store_.settings.startup) {
     if (line.empty()) continue;
@@ -225,7 +225,7 @@ void Session::run_startup(std::string& out) {
   }
 }
 
-bool Session::next_line(std::string& out) {
+bool Connection::next_line(std::string& out) {
   const std::size_t end = rx_.find_first_of("\r\n");
   if (end == std::string::npos) {
     if (rx_.size() >= kLineBytes) {  // no end in sight: drop it, answer once
@@ -255,7 +255,7 @@ bool Session::next_line(std::string& out) {
   return taken && !busy_ && !homing_;
 }
 
-bool Session::gcode(const std::string& line, std::string& out) {
+bool Connection::gcode(const std::string& line, std::string& out) {
   const runtime::Status s = controller_.status();
   if (moving(s.state) || s.resetting || door_ || startup_due_) return false;
   if (sleep_ || s.state == MachineState::kAlarm) {
@@ -275,7 +275,7 @@ bool Session::gcode(const std::string& line, std::string& out) {
   return true;
 }
 
-bool Session::dollar(const std::string& raw, std::string& out) {
+bool Connection::dollar(const std::string& raw, std::string& out) {
   const std::string line = compact_upper(raw);
   const runtime::Status s = controller_.status();
   const bool idle_like = s.state == MachineState::kIdle || s.state == MachineState::kAlarm ||
@@ -365,7 +365,7 @@ bool Session::dollar(const std::string& raw, std::string& out) {
   return true;
 }
 
-void Session::write_setting(std::string_view line, std::string& out) {
+void Connection::write_setting(std::string_view line, std::string& out) {
   const std::size_t eq = line.find('=');
   if (eq == std::string_view::npos) {
     error_out(out, Error::kInvalidStatement);
@@ -390,7 +390,7 @@ void Session::write_setting(std::string_view line, std::string& out) {
   line_out(out, "ok");
 }
 
-void Session::restore(std::string_view what, std::string& out) {
+void Connection::restore(std::string_view what, std::string& out) {
   if (what != "$" && what != "#" && what != "*") {
     error_out(out, Error::kInvalidStatement);
     return;
@@ -416,7 +416,7 @@ void Session::restore(std::string_view what, std::string& out) {
   line_out(out, "ok");
 }
 
-void Session::jog(std::string_view body, std::string& out) {
+void Connection::jog(std::string_view body, std::string& out) {
   const std::string w = compact_upper(body);
   runtime::JogRequest r;
   bool absolute_work = true;  // G90 (Grbl's default for $J) in work coordinates
@@ -497,7 +497,7 @@ void Session::jog(std::string_view body, std::string& out) {
   line_out(out, "ok");
 }
 
-void Session::offsets(std::string& out) const {
+void Connection::offsets(std::string& out) const {
   const runtime::Status s = controller_.status();
   // cncore reports the active offset (G54…G59.3 + G92) as one; it is shown as G54.
   out += fmt::format("[G54:{:.3f},{:.3f},{:.3f}]\r\n", s.work_offset[0], s.work_offset[1],
@@ -509,7 +509,7 @@ void Session::offsets(std::string& out) const {
   line_out(out, "[PRB:0.000,0.000,0.000:0]");
 }
 
-void Session::report_status(std::string& out) {
+void Connection::report_status(std::string& out) {
   const runtime::Status s = controller_.status();
   ReportInputs in;
   in.door = door_;
