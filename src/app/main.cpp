@@ -80,6 +80,8 @@ std::vector<std::string> with_bare_progress_on(int argc, char** argv) {
   return args;
 }
 
+// Size: CLI11's declarations of every command and option in one place, one statement per
+// option, so `--help`, the man page and the completions read from one list.
 int main_cli(int argc, char** argv) {
   CLI::App app{
       "cncore: a CNC numerical-control kernel on a simulated machine.\n"

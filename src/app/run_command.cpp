@@ -76,6 +76,8 @@ double cycle_time_without_correction_s(const std::string& program, MachineConfig
 
 }  // namespace
 
+// Size: `cncore run` wires the options to the run in order: machine and modes, adaptive feed,
+// cutting simulation, outputs (temporaries renamed on success), the summary's comparisons.
 int command_run(const RunArgs& a) {
   const MachineConfig machine = with_correction_option(machine_from(a.machine), a.correction);
   sim::RunOptions options;

@@ -123,6 +123,8 @@ std::string format_table_summary(const io::Summary& s, const tables::RunSummary&
 
 }  // namespace
 
+// Size: `cncore table` wires the options to the table run in order: settings from the
+// configuration and the command line, the master-axis program, outputs, the summary.
 int command_table(const TableArgs& a) {
   const MachineConfig machine = machine_from(a.machine);
   const ProgressMode progress_shown = progress_mode(a.progress);

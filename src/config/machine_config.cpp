@@ -521,6 +521,8 @@ MachineConfig load_machine_config(const std::string& path) {
   return parse_machine_config(text.str(), path);
 }
 
+// Size: one line per configuration key, in the order of the file it writes (every section and
+// its comments); splitting it by section would scatter that order.
 std::string machine_config_to_toml(const MachineConfig& c) {
   std::string o;
   auto line = [&o](const std::string& key_value, std::string_view comment) {

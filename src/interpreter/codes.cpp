@@ -14,6 +14,8 @@ constexpr CodeInfo okm(MGroup g, const char* name) {
 }
 }  // namespace
 
+// Size: the table of every G code cncore knows, one case per code, in numeric order; a lookup
+// table split in parts would only be harder to search.
 CodeInfo g_code_info(int code10) {
   switch (code10) {
     case 0:

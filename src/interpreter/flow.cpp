@@ -274,108 +274,24 @@ void Interpreter::Impl::execute_oword(const OWord& o) {
       return;
     }
     case OKeyword::kEndSub:
-    case OKeyword::kReturn: {
-      if (frames_.empty() || frames_.back().fanuc || frames_.back().label != o.label) {
-        fail(o.col, fmt::format("{} {} outside a call of {}", display(o.label),
-                                keyword_text(o.keyword), display(o.label)));
-      }
-      // An optional [value] is returned in #<_value>.
-      std::size_t pos = o.args;
-      if (pos < line_.text.size()) {
-        Evaluator eval(line_, ctx_, params_);
-        const double v = eval.real_value(pos);
-        params_.set_named("_value", v);
-        params_.set_named("_value_returned", 1);
-      } else {
-        params_.set_named("_value_returned", 0);
-      }
-      const Frame f = frames_.back();
-      frames_.pop_back();
-      loops_.resize(f.loop_depth);
-      params_.pop_scope();
-      reader_.seek(f.return_to);
+    case OKeyword::kReturn:
+      return_from_sub(o);
       return;
-    }
-    case OKeyword::kCall: {
-      // Arguments [e1] [e2] … become #1, #2, … of the new scope.
-      std::array<double, Parameters::kArgCount> args{};
-      std::size_t pos = o.args;
-      std::size_t n = 0;
-      Evaluator eval(line_, ctx_, params_);
-      while (pos < line_.text.size()) {
-        if (n >= args.size()) fail(line_.col(pos), "more than 30 subroutine arguments");
-        args[n++] = eval.real_value(pos);
-      }
-      if (frames_.size() >= machine_.max_call_depth) {
-        fail(o.col, fmt::format("call of {} exceeds max_call_depth ({})", display(o.label),
-                                machine_.max_call_depth));
-      }
-      spend(ctx_.line, o.col);
-      Frame f;
-      f.label = o.label;
-      f.return_to = reader_.following();
-      f.loop_depth = loops_.size();
-      f.line = ctx_.line;
-      f.col = o.col;
-      const SubDef* def = find_sub(o.label, o.col);
-      f.def_line = def->line;
-      f.body = def->body;
-      frames_.push_back(f);
-      params_.push_scope(args);
-      params_.set_named("_value_returned", 0);
-      reader_.seek(def->body);
+    case OKeyword::kCall:
+      call_sub(o);
       return;
-    }
-    case OKeyword::kIf: {
-      // Run the first branch whose condition holds; "elseif"/"else" met while running a
-      // branch skip to "endif".
-      OWord cur = o;
-      double cond = condition(cur);
-      while (cond == 0) {
-        const OKeyword k =
-            skip_to(o, {OKeyword::kElseIf, OKeyword::kElse, OKeyword::kEndIf}, "endif");
-        if (k != OKeyword::kElseIf) return;
-        parse_oword(cur);
-        cond = condition(cur);
-      }
+    case OKeyword::kIf:
+      run_if(o);
       return;
-    }
     case OKeyword::kElseIf:
     case OKeyword::kElse:
       skip_to(o, {OKeyword::kEndIf}, "endif");
       return;
     case OKeyword::kEndIf:
       return;
-    case OKeyword::kWhile: {
-      Loop* top = loops_.empty() ? nullptr : &loops_.back();
-      if (top != nullptr && top->label == o.label && top->kind == Loop::Kind::kDo) {
-        // The end of a do … while loop.
-        if (condition(o) != 0) {
-          count_iteration(*top);
-          reader_.seek(top->head);
-        } else {
-          loops_.pop_back();
-        }
-        return;
-      }
-      if (top != nullptr && top->label == o.label && top->kind == Loop::Kind::kWhile &&
-          top->head.offset == reader_.current().offset) {
-        count_iteration(*top);  // back at the head after endwhile or continue
-      } else {
-        Loop l;
-        l.label = o.label;
-        l.kind = Loop::Kind::kWhile;
-        l.head = reader_.current();
-        l.line = ctx_.line;
-        l.col = o.col;
-        loops_.push_back(l);
-      }
-      if (condition(o) == 0) {
-        loops_.pop_back();
-        skip_to(o, {OKeyword::kEndWhile}, "endwhile");
-      }
+    case OKeyword::kWhile:
+      run_while(o);
       return;
-    }
     case OKeyword::kEndWhile: {
       if (loops_.empty() || loops_.back().label != o.label ||
           loops_.back().kind != Loop::Kind::kWhile) {
@@ -394,65 +310,171 @@ void Interpreter::Impl::execute_oword(const OWord& o) {
       loops_.push_back(l);
       return;
     }
-    case OKeyword::kRepeat: {
-      std::size_t pos = o.args;
-      if (pos >= line_.text.size()) fail(o.col, "repeat needs a count [ … ]");
-      Evaluator eval(line_, ctx_, params_);
-      const double count = std::round(eval.real_value(pos));
-      Loop l;
-      l.label = o.label;
-      l.kind = Loop::Kind::kRepeat;
-      l.head = reader_.following();
-      l.remaining = count;
-      l.line = ctx_.line;
-      l.col = o.col;
-      if (count >= static_cast<double>(machine_.max_loop_iterations)) loop_limit(l);
-      if (count <= 0) {
-        skip_to(o, {OKeyword::kEndRepeat}, "endrepeat");
-        return;
-      }
-      loops_.push_back(l);
+    case OKeyword::kRepeat:
+      run_repeat(o);
       return;
-    }
-    case OKeyword::kEndRepeat: {
-      if (loops_.empty() || loops_.back().label != o.label ||
-          loops_.back().kind != Loop::Kind::kRepeat) {
-        fail(o.col, fmt::format("{} endrepeat without repeat", display(o.label)));
-      }
-      Loop& l = loops_.back();
-      count_iteration(l);
-      l.remaining -= 1;
-      if (l.remaining > 0) {
-        reader_.seek(l.head);
-      } else {
-        loops_.pop_back();
-      }
+    case OKeyword::kEndRepeat:
+      end_repeat(o);
       return;
-    }
     case OKeyword::kBreak:
-    case OKeyword::kContinue: {
-      if (loops_.empty() || loops_.back().label != o.label) {
-        fail(o.col,
-             fmt::format("{} {} outside its loop", display(o.label), keyword_text(o.keyword)));
-      }
-      const Loop::Kind kind = loops_.back().kind;
-      const OKeyword close = kind == Loop::Kind::kWhile ? OKeyword::kEndWhile
-                             : kind == Loop::Kind::kDo  ? OKeyword::kWhile
-                                                        : OKeyword::kEndRepeat;
-      const char* what = keyword_text(close);
-      if (o.keyword == OKeyword::kBreak) {
-        loops_.pop_back();
-        skip_to(o, {close}, what);
-        return;
-      }
-      // continue: go to the loop's closing line and run it (re-test, count, jump back).
-      skip_to(o, {close}, what);
-      OWord closing;
-      parse_oword(closing);
-      execute_oword(closing);
+    case OKeyword::kContinue:
+      leave_loop(o);
       return;
-    }
   }
+}
+
+// endsub / return: back to the caller, with an optional [value] in #<_value>.
+void Interpreter::Impl::return_from_sub(const OWord& o) {
+  if (frames_.empty() || frames_.back().fanuc || frames_.back().label != o.label) {
+    fail(o.col, fmt::format("{} {} outside a call of {}", display(o.label), keyword_text(o.keyword),
+                            display(o.label)));
+  }
+  std::size_t pos = o.args;
+  if (pos < line_.text.size()) {
+    Evaluator eval(line_, ctx_, params_);
+    const double v = eval.real_value(pos);
+    params_.set_named("_value", v);
+    params_.set_named("_value_returned", 1);
+  } else {
+    params_.set_named("_value_returned", 0);
+  }
+  const Frame f = frames_.back();
+  frames_.pop_back();
+  loops_.resize(f.loop_depth);
+  params_.pop_scope();
+  reader_.seek(f.return_to);
+}
+
+// o<name> call [e1] [e2] …: the arguments become #1, #2, … of the new scope.
+void Interpreter::Impl::call_sub(const OWord& o) {
+  std::array<double, Parameters::kArgCount> args{};
+  std::size_t pos = o.args;
+  std::size_t n = 0;
+  Evaluator eval(line_, ctx_, params_);
+  while (pos < line_.text.size()) {
+    if (n >= args.size()) fail(line_.col(pos), "more than 30 subroutine arguments");
+    args[n++] = eval.real_value(pos);
+  }
+  if (frames_.size() >= machine_.max_call_depth) {
+    fail(o.col, fmt::format("call of {} exceeds max_call_depth ({})", display(o.label),
+                            machine_.max_call_depth));
+  }
+  spend(ctx_.line, o.col);
+  Frame f;
+  f.label = o.label;
+  f.return_to = reader_.following();
+  f.loop_depth = loops_.size();
+  f.line = ctx_.line;
+  f.col = o.col;
+  const SubDef* def = find_sub(o.label, o.col);
+  f.def_line = def->line;
+  f.body = def->body;
+  frames_.push_back(f);
+  params_.push_scope(args);
+  params_.set_named("_value_returned", 0);
+  reader_.seek(def->body);
+}
+
+// if / elseif / else: run the first branch whose condition holds; "elseif"/"else" met
+// while running a branch skip to "endif".
+void Interpreter::Impl::run_if(const OWord& o) {
+  OWord cur = o;
+  double cond = condition(cur);
+  while (cond == 0) {
+    const OKeyword k = skip_to(o, {OKeyword::kElseIf, OKeyword::kElse, OKeyword::kEndIf}, "endif");
+    if (k != OKeyword::kElseIf) return;
+    parse_oword(cur);
+    cond = condition(cur);
+  }
+}
+
+// while: the head of a while loop, or the end of a do … while loop.
+void Interpreter::Impl::run_while(const OWord& o) {
+  Loop* top = loops_.empty() ? nullptr : &loops_.back();
+  if (top != nullptr && top->label == o.label && top->kind == Loop::Kind::kDo) {
+    // The end of a do … while loop.
+    if (condition(o) != 0) {
+      count_iteration(*top);
+      reader_.seek(top->head);
+    } else {
+      loops_.pop_back();
+    }
+    return;
+  }
+  if (top != nullptr && top->label == o.label && top->kind == Loop::Kind::kWhile &&
+      top->head.offset == reader_.current().offset) {
+    count_iteration(*top);  // back at the head after endwhile or continue
+  } else {
+    Loop l;
+    l.label = o.label;
+    l.kind = Loop::Kind::kWhile;
+    l.head = reader_.current();
+    l.line = ctx_.line;
+    l.col = o.col;
+    loops_.push_back(l);
+  }
+  if (condition(o) == 0) {
+    loops_.pop_back();
+    skip_to(o, {OKeyword::kEndWhile}, "endwhile");
+  }
+}
+
+// repeat [count]: the head of a counted loop.
+void Interpreter::Impl::run_repeat(const OWord& o) {
+  std::size_t pos = o.args;
+  if (pos >= line_.text.size()) fail(o.col, "repeat needs a count [ … ]");
+  Evaluator eval(line_, ctx_, params_);
+  const double count = std::round(eval.real_value(pos));
+  Loop l;
+  l.label = o.label;
+  l.kind = Loop::Kind::kRepeat;
+  l.head = reader_.following();
+  l.remaining = count;
+  l.line = ctx_.line;
+  l.col = o.col;
+  if (count >= static_cast<double>(machine_.max_loop_iterations)) loop_limit(l);
+  if (count <= 0) {
+    skip_to(o, {OKeyword::kEndRepeat}, "endrepeat");
+    return;
+  }
+  loops_.push_back(l);
+}
+
+void Interpreter::Impl::end_repeat(const OWord& o) {
+  if (loops_.empty() || loops_.back().label != o.label ||
+      loops_.back().kind != Loop::Kind::kRepeat) {
+    fail(o.col, fmt::format("{} endrepeat without repeat", display(o.label)));
+  }
+  Loop& l = loops_.back();
+  count_iteration(l);
+  l.remaining -= 1;
+  if (l.remaining > 0) {
+    reader_.seek(l.head);
+  } else {
+    loops_.pop_back();
+  }
+}
+
+// break / continue of the innermost loop.
+void Interpreter::Impl::leave_loop(const OWord& o) {
+  if (loops_.empty() || loops_.back().label != o.label) {
+    fail(o.col, fmt::format("{} {} outside its loop", display(o.label), keyword_text(o.keyword)));
+  }
+  const Loop::Kind kind = loops_.back().kind;
+  const OKeyword close = kind == Loop::Kind::kWhile ? OKeyword::kEndWhile
+                         : kind == Loop::Kind::kDo  ? OKeyword::kWhile
+                                                    : OKeyword::kEndRepeat;
+  const char* what = keyword_text(close);
+  if (o.keyword == OKeyword::kBreak) {
+    loops_.pop_back();
+    skip_to(o, {close}, what);
+    return;
+  }
+  // continue: go to the loop's closing line and run it (re-test, count, jump back).
+  skip_to(o, {close}, what);
+  OWord closing;
+  parse_oword(closing);
+  execute_oword(closing);
 }
 
 // M98 P<n> [L<count>]: call Fanuc subprogram O<n> (same parameter scope).

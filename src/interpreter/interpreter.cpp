@@ -293,22 +293,7 @@ void Interpreter::Impl::emit_aux(char letter, double value, bool waits) {
 void Interpreter::Impl::execute_words() {
   const Words& w = words_;
 
-  // Everything beyond cncore's dialect is refused first, naming the feature.
-  for (int i = 0; i < w.g_count; ++i) {
-    const auto& g = w.g[static_cast<std::size_t>(i)];
-    const CodeInfo info = g_code_info(g.code10);
-    if (!info.supported) {
-      fail(g.col, fmt::format("{} {} is not supported", code_text('G', g.code10), info.name));
-    }
-  }
-  for (int i = 0; i < w.m_count; ++i) {
-    const auto& m = w.m[static_cast<std::size_t>(i)];
-    const CodeInfo info = m_code_info(m.code10);
-    if (!info.supported) {
-      fail(m.col, fmt::format("{} {} is not supported", code_text('M', m.code10), info.name));
-    }
-  }
-  if (w.has('d')) fail(w['d'].col, "D word: cutter compensation (G41/G42) is not supported");
+  refuse_unsupported();
 
   // The units of this block: a G20/G21 in the block applies to all its numbers (cncore reads
   // F with them too, so "G20 F10" is 10 in/min).
@@ -316,56 +301,18 @@ void Interpreter::Impl::execute_words() {
   if (const auto* u = w.group(GGroup::kUnits)) inch = u->code10 == 200;
   const double unit = inch ? 25.4 : 1.0;
 
-  // 4 F
-  if (w.has('f')) {
-    if (w['f'].value < 0) fail(w['f'].col, "negative feed rate F");
-    modal_.feed_mm_min = w['f'].value * unit;
-    modal_.feed_set = true;
-  }
-  // 5 S
-  if (w.has('s')) {
-    if (w['s'].value < 0) fail(w['s'].col, "negative spindle speed S");
-    emit_aux('S', w['s'].value, false);
-  }
+  feed_and_speed(unit);  // 4 F, 5 S
   // 6 T (select: the tool is prepared; M6 makes it current), 8 M6 / M61
   if (w.has('t')) select_tool();
   if (const auto* m = w.mgroup(MGroup::kToolChange)) change_tool(*m);
   // 9 spindle
   if (const auto* m = w.mgroup(MGroup::kSpindle)) emit_aux('M', m->code10 / 10.0, true);
-  // 10 overrides: M52 adaptive feed control (spec 04), P1 or no P on, P0 off. An aux event
-  // that does not stop the motion: it takes effect where the tool passes it.
-  for (int i = 0; i < w.m_count; ++i) {
-    const auto& m = w.m[static_cast<std::size_t>(i)];
-    if (m.code10 != 520) continue;
-    double p = 1;
-    if (w.has('p')) {
-      const Words::Code* g_nm = w.group(GGroup::kNonModal);
-      const Words::Code* g_pc = w.group(GGroup::kPathControl);
-      const Words::Code* g_mo = w.group(GGroup::kMotion);
-      const Words::Code* other =
-          (g_nm != nullptr && (g_nm->code10 == 40 || g_nm->code10 == 100))  ? g_nm
-          : (g_pc != nullptr && g_pc->code10 == 640)                        ? g_pc
-          : (g_mo != nullptr && (g_mo->code10 == 20 || g_mo->code10 == 30)) ? g_mo
-                                                                            : nullptr;
-      if (other != nullptr) {
-        fail(m.col, fmt::format("M52 and {} both use the P word: put them in separate blocks",
-                                code_text('G', other->code10)));
-      }
-      p = w['p'].value;
-      if (p != 0 && p != 1) {
-        fail(w['p'].col, "M52 P must be 1 (adaptive feed on) or 0 (off)");
-      }
-    }
-    Block b = base_block(BlockKind::kAux);
-    b.aux_letter = 'M';
-    b.aux_value = 52;
-    b.aux_p = p;
-    out_.push_back(b);
-  }
+  // 10 overrides
+  adaptive_feed_events();
   // 11 coolant (M7 and M8 may both be present)
   for (int i = 0; i < w.m_count; ++i) {
-    const auto& m = w.m[static_cast<std::size_t>(i)];
-    if (m.code10 == 70 || m.code10 == 80 || m.code10 == 90) emit_aux('M', m.code10 / 10.0, false);
+    const int code10 = w.m[static_cast<std::size_t>(i)].code10;
+    if (code10 == 70 || code10 == 80 || code10 == 90) emit_aux('M', code10 / 10.0, false);
   }
   // 12 user-defined M codes: M160 / M161 switch the direction feed correction (spec 03) on / off
   // from this block's motion on. No stop: the correction stage acts on the event in the stream.
@@ -373,13 +320,7 @@ void Interpreter::Impl::execute_words() {
   // 14 dwell
   const Words::Code* nonmodal = w.group(GGroup::kNonModal);
   const int nm = nonmodal != nullptr ? nonmodal->code10 : -1;
-  if (nm == 40) {
-    if (!w.has('p')) fail(nonmodal->col, "G4 dwell without P (seconds)");
-    if (w['p'].value < 0) fail(w['p'].col, "negative dwell time P");
-    Block b = base_block(BlockKind::kDwell);
-    b.dwell_s = w['p'].value;
-    out_.push_back(b);
-  }
+  if (nm == 40) dwell(nonmodal->col);
   // 15 plane
   if (const auto* g = w.group(GGroup::kPlane)) {
     modal_.plane = g->code10 == 170 ? Plane::kXY : g->code10 == 180 ? Plane::kZX : Plane::kYZ;
@@ -398,27 +339,7 @@ void Interpreter::Impl::execute_words() {
     params_.set_numbered(kParamCoordSystem, modal_.coord_system);
   }
   // 20 path control
-  if (const auto* g = w.group(GGroup::kPathControl)) {
-    if (g->code10 == 610) {
-      modal_.path_mode = PathMode::kExactPath;
-      modal_.tolerance_mm = -1;
-    } else if (g->code10 == 611) {
-      modal_.path_mode = PathMode::kExactStop;
-      modal_.tolerance_mm = -1;
-    } else {
-      modal_.path_mode = PathMode::kBlend;
-      modal_.tolerance_mm = -1;
-      if (w.has('p')) {
-        if (w['p'].value < 0) fail(w['p'].col, "negative G64 tolerance P");
-        modal_.tolerance_mm = w['p'].value * unit;
-      }
-      modal_.smooth_tolerance_mm = -1;
-      if (w.has('q')) {
-        if (w['q'].value < 0) fail(w['q'].col, "negative G64 smoothing tolerance Q");
-        modal_.smooth_tolerance_mm = w['q'].value * unit;
-      }
-    }
-  }
+  if (const auto* g = w.group(GGroup::kPathControl)) set_path_control(*g, unit);
   // 21 distance mode, 22 arc distance mode
   if (const auto* g = w.group(GGroup::kDistance)) modal_.absolute = g->code10 == 900;
   if (const auto* g = w.group(GGroup::kArcDistance)) modal_.arc_absolute = g->code10 == 901;
@@ -456,29 +377,20 @@ void Interpreter::Impl::execute_words() {
   if (nm == 280 || nm == 281 || nm == 300 || nm == 301) go_home(nm);
 
   // 25 motion
-  if (motion_word != nullptr) {
-    switch (motion_word->code10) {
-      case 0:
-        modal_.motion = Motion::kRapid;
-        break;
-      case 10:
-        modal_.motion = Motion::kLine;
-        break;
-      case 20:
-        modal_.motion = Motion::kArcCw;
-        break;
-      case 30:
-        modal_.motion = Motion::kArcCcw;
-        break;
-      case 800:
-        modal_.motion = Motion::kNone;
-        break;
-      default:
-        modal_.motion = Motion::kCycle;
-        modal_.cycle = motion_word->code10;
-        break;
-    }
-  }
+  execute_motion(nonmodal, axes_for_nonmodal, have_axes, first_axis_col);
+
+  // 26 stops
+  execute_stops();
+}
+
+// Step 25: the motion mode of the block, and the move its axis words ask for (unless a
+// non-modal code of the block took them).
+void Interpreter::Impl::execute_motion(const Words::Code* nonmodal, bool axes_for_nonmodal,
+                                       bool have_axes, std::uint32_t first_axis_col) {
+  const Words& w = words_;
+  const int nm = nonmodal != nullptr ? nonmodal->code10 : -1;
+  const Words::Code* motion_word = w.group(GGroup::kMotion);
+  if (motion_word != nullptr) set_motion_mode(motion_word->code10);
   const bool arc_mode = modal_.motion == Motion::kArcCw || modal_.motion == Motion::kArcCcw;
   const bool have_centre = w.has('i') || w.has('j') || w.has('k');
   const bool cycle_mode = modal_.motion == Motion::kCycle;
@@ -517,8 +429,137 @@ void Interpreter::Impl::execute_words() {
       }
     }
   }
+}
 
-  // 26 stops
+// Steps 4 and 5: F (in the block's units per minute) and S.
+void Interpreter::Impl::feed_and_speed(double unit) {
+  const Words& w = words_;
+  if (w.has('f')) {
+    if (w['f'].value < 0) fail(w['f'].col, "negative feed rate F");
+    modal_.feed_mm_min = w['f'].value * unit;
+    modal_.feed_set = true;
+  }
+  if (w.has('s')) {
+    if (w['s'].value < 0) fail(w['s'].col, "negative spindle speed S");
+    emit_aux('S', w['s'].value, false);
+  }
+}
+
+// G4 P<seconds>.
+void Interpreter::Impl::dwell(std::uint32_t col) {
+  const Words& w = words_;
+  if (!w.has('p')) fail(col, "G4 dwell without P (seconds)");
+  if (w['p'].value < 0) fail(w['p'].col, "negative dwell time P");
+  Block b = base_block(BlockKind::kDwell);
+  b.dwell_s = w['p'].value;
+  out_.push_back(b);
+}
+
+// Everything beyond cncore's dialect is refused first, naming the feature.
+void Interpreter::Impl::refuse_unsupported() const {
+  const Words& w = words_;
+  for (int i = 0; i < w.g_count; ++i) {
+    const auto& g = w.g[static_cast<std::size_t>(i)];
+    const CodeInfo info = g_code_info(g.code10);
+    if (!info.supported) {
+      fail(g.col, fmt::format("{} {} is not supported", code_text('G', g.code10), info.name));
+    }
+  }
+  for (int i = 0; i < w.m_count; ++i) {
+    const auto& m = w.m[static_cast<std::size_t>(i)];
+    const CodeInfo info = m_code_info(m.code10);
+    if (!info.supported) {
+      fail(m.col, fmt::format("{} {} is not supported", code_text('M', m.code10), info.name));
+    }
+  }
+  if (w.has('d')) fail(w['d'].col, "D word: cutter compensation (G41/G42) is not supported");
+}
+
+// Step 10 of the order of execution: M52 adaptive feed control (spec 04), P1 or no P on, P0
+// off. An aux event that does not stop the motion: it takes effect where the tool passes it.
+void Interpreter::Impl::adaptive_feed_events() {
+  const Words& w = words_;
+  for (int i = 0; i < w.m_count; ++i) {
+    const auto& m = w.m[static_cast<std::size_t>(i)];
+    if (m.code10 != 520) continue;
+    double p = 1;
+    if (w.has('p')) {
+      const Words::Code* g_nm = w.group(GGroup::kNonModal);
+      const Words::Code* g_pc = w.group(GGroup::kPathControl);
+      const Words::Code* g_mo = w.group(GGroup::kMotion);
+      const Words::Code* other =
+          (g_nm != nullptr && (g_nm->code10 == 40 || g_nm->code10 == 100))  ? g_nm
+          : (g_pc != nullptr && g_pc->code10 == 640)                        ? g_pc
+          : (g_mo != nullptr && (g_mo->code10 == 20 || g_mo->code10 == 30)) ? g_mo
+                                                                            : nullptr;
+      if (other != nullptr) {
+        fail(m.col, fmt::format("M52 and {} both use the P word: put them in separate blocks",
+                                code_text('G', other->code10)));
+      }
+      p = w['p'].value;
+      if (p != 0 && p != 1) {
+        fail(w['p'].col, "M52 P must be 1 (adaptive feed on) or 0 (off)");
+      }
+    }
+    Block b = base_block(BlockKind::kAux);
+    b.aux_letter = 'M';
+    b.aux_value = 52;
+    b.aux_p = p;
+    out_.push_back(b);
+  }
+}
+
+// Step 20: G61 exact path, G61.1 exact stop, G64 [P tolerance] [Q smoothing tolerance].
+void Interpreter::Impl::set_path_control(const Words::Code& g, double unit) {
+  const Words& w = words_;
+  if (g.code10 == 610) {
+    modal_.path_mode = PathMode::kExactPath;
+    modal_.tolerance_mm = -1;
+  } else if (g.code10 == 611) {
+    modal_.path_mode = PathMode::kExactStop;
+    modal_.tolerance_mm = -1;
+  } else {
+    modal_.path_mode = PathMode::kBlend;
+    modal_.tolerance_mm = -1;
+    if (w.has('p')) {
+      if (w['p'].value < 0) fail(w['p'].col, "negative G64 tolerance P");
+      modal_.tolerance_mm = w['p'].value * unit;
+    }
+    modal_.smooth_tolerance_mm = -1;
+    if (w.has('q')) {
+      if (w['q'].value < 0) fail(w['q'].col, "negative G64 smoothing tolerance Q");
+      modal_.smooth_tolerance_mm = w['q'].value * unit;
+    }
+  }
+}
+
+void Interpreter::Impl::set_motion_mode(int code10) {
+  switch (code10) {
+    case 0:
+      modal_.motion = Motion::kRapid;
+      break;
+    case 10:
+      modal_.motion = Motion::kLine;
+      break;
+    case 20:
+      modal_.motion = Motion::kArcCw;
+      break;
+    case 30:
+      modal_.motion = Motion::kArcCcw;
+      break;
+    case 800:
+      modal_.motion = Motion::kNone;
+      break;
+    default:
+      modal_.motion = Motion::kCycle;
+      modal_.cycle = code10;
+      break;
+  }
+}
+
+// Step 26: program stops and ends, M99 return, M98 call.
+void Interpreter::Impl::execute_stops() {
+  const Words& w = words_;
   if (const auto* m = w.mgroup(MGroup::kStopping)) {
     switch (m->code10) {
       case 0:

@@ -179,7 +179,16 @@ struct Interpreter::Impl final : LiveParameters {
   void parse_words(std::size_t pos);  // fills words_ from line_.text
   [[noreturn]] void exponent_or_unknown(std::size_t pos, std::size_t value_start,
                                         char last_letter) const;
-  void execute_words();                                        // LinuxCNC order of execution
+  void execute_words();  // LinuxCNC order of execution
+  void refuse_unsupported() const;
+  void adaptive_feed_events();  // M52
+  void set_path_control(const Words::Code& g, double unit);
+  void set_motion_mode(int code10);
+  void dwell(std::uint32_t col);  // G4
+  void feed_and_speed(double unit);
+  void execute_motion(const Words::Code* nonmodal, bool axes_for_nonmodal, bool have_axes,
+                      std::uint32_t first_axis_col);
+  void execute_stops();
   void line_motion(const AxisVec& target, std::uint32_t col);  // G0 / G1
   void arc(const AxisVec& target, bool ccw, std::uint32_t col);
   void emit_arc(const AxisVec& target, Vec2 c, bool ccw, std::uint32_t turns, std::uint32_t col);
@@ -219,6 +228,13 @@ struct Interpreter::Impl final : LiveParameters {
   // runs, never while skipping).
   bool parse_oword(OWord& o, bool evaluate = false) const;
   void execute_oword(const OWord& o);
+  void return_from_sub(const OWord& o);  // endsub, return
+  void call_sub(const OWord& o);
+  void run_if(const OWord& o);
+  void run_while(const OWord& o);  // while, and the end of do … while
+  void run_repeat(const OWord& o);
+  void end_repeat(const OWord& o);
+  void leave_loop(const OWord& o);  // break, continue
   OKeyword skip_to(const OWord& from, std::initializer_list<OKeyword> stops, const char* what);
   void skip_fanuc_sub(std::uint32_t def_line);
   const SubDef* find_sub(const std::string& key, std::uint32_t col);

@@ -78,6 +78,8 @@ AxisVec Segment::direction_at(double phi) const {
   return d;
 }
 
+// Size: every field of a motion segment (geometry, shape passing speed Vb, per-axis limits,
+// post-filter bound) with the formula beside the field it sets, spec 01's order.
 Segment make_motion_segment(const Block& b, const Limits& lim) {
   Segment s;
   s.kind = ItemKind::kMotion;

@@ -293,6 +293,8 @@ constexpr std::size_t kSampleBatch = 32;
 // The motion cycle: takes blocks from `source` whenever the kernel has room, steps the kernel,
 // hands samples to the observers. The same code for both sources, so both paths make exactly
 // the same kernel calls in the same order.
+// Size: the motion cycle's driving loop: block intake, the stall watchdog, batching and error
+// delivery share the loop's state and their order is the contract documented above.
 template <typename Source>
 RunCounts run_cycles(Source& source, const std::string& program_path, const MachineConfig& machine,
                      const RunOptions& options, const std::vector<SampleObserver*>& observers) {

@@ -176,6 +176,8 @@ struct LimitCheck {
 
 }  // namespace
 
+// Size: validation, effective tables, limits and the slow-to-fit factor in the order the
+// plan is built; each step reads what the previous one produced.
 TablePlan plan_tables(std::vector<Table> tables, const MachineConfig& machine,
                       const RunOptions& options) {
   TablePlan plan;

@@ -68,6 +68,9 @@ bool feasible(double wx, double wy, double dx, double dy, double lxy2, double r2
 
 }  // namespace
 
+// Size: one pass over the footprint's rows and the cells of each row; the tool shapes' per-cell
+// cases (flat, ball, bull nose) use the row geometry computed once, in the cutting simulation's
+// innermost loop.
 double HeightMap::sweep(const ToolProfile& tool, const Vec3& a, const Vec3& b) {
   const double R = tool.radius_mm;
   const double r2 = R * R;
