@@ -78,8 +78,11 @@ std::string switches_command(runtime::Controller& c, const std::vector<std::stri
       s.optional_stop = on;
     } else if (key == "single_block") {
       s.single_block = on;
+    } else if (key == "block_delete") {
+      s.block_delete = on;
     } else {
-      return fmt::format("error: switches: no switch '{}' (optional_stop, single_block)", key);
+      return fmt::format(
+          "error: switches: no switch '{}' (optional_stop, single_block, block_delete)", key);
     }
   }
   return reply(c.set_switches(s));

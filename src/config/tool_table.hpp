@@ -18,6 +18,7 @@ struct ToolEntry {
   std::uint32_t pocket = 0;
   std::array<double, kMaxAxes> offset_mm{};  // X Y Z A B C (rotary: degrees); Z is the length
   double diameter_mm = 0;
+  friend bool operator==(const ToolEntry&, const ToolEntry&) = default;
 };
 
 using ToolTable = std::map<std::uint32_t, ToolEntry>;

@@ -1,5 +1,5 @@
 // What a controller carries from one program or MDI line to the next: the persistent parameters
-// and the modal state.
+// the modal state and the tool table.
 #include "interpreter/interpreter.hpp"
 #include "interpreter/interpreter_impl.hpp"
 
@@ -15,6 +15,10 @@ std::map<int, double> Interpreter::numbered_parameters(int first, int last) cons
 
 ModalState Interpreter::modal_state() const {
   return impl_->modal_;
+}
+
+const ToolTable& Interpreter::tool_table() const {
+  return impl_->tools_;
 }
 
 }  // namespace cncore::interp

@@ -195,7 +195,7 @@ OKeyword Interpreter::Impl::skip_to(const OWord& from, std::initializer_list<OKe
   while (reader_.next(raw)) {
     ctx_.line = reader_.current().line;
     normalize_line(raw, line_, ctx_);
-    if (line_.block_delete || line_.text.empty()) continue;
+    if (skipped() || line_.text.empty()) continue;
     if (!parse_oword(o) || o.label != from.label) continue;
     for (OKeyword k : stops) {
       if (o.keyword == k) return k;
@@ -231,7 +231,7 @@ const SubDef* Interpreter::Impl::find_sub(const std::string& key, std::uint32_t 
   while (reader_.next(raw)) {
     ctx_.line = reader_.current().line;
     normalize_line(raw, line_, ctx_);
-    if (line_.block_delete || line_.text.empty() || !parse_oword(o)) continue;
+    if (skipped() || line_.text.empty() || !parse_oword(o)) continue;
     std::string k;
     if (o.keyword == OKeyword::kSub) {
       k = o.label;

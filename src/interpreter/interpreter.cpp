@@ -44,6 +44,7 @@ Interpreter::Impl::Impl(LineReader r, std::string name, MachineConfig m, const O
     params_.set_named(key, v);
   }
   init_tools(options);
+  block_delete_ = options.block_delete;
   out_.reserve(8);
   words_.assignments.reserve(8);
 }
@@ -98,7 +99,7 @@ void Interpreter::Impl::step() {
   }
   ctx_.line = reader_.current().line;
   normalize_line(raw, line_, ctx_);
-  if (line_.block_delete) return;  // block delete switch is on: skip "/" lines
+  if (skipped()) return;
   if (line_.percent) {
     // "%" opens the program on its first line; a second "%" ends it.
     if (!started_ && !percent_framed_) {

@@ -24,6 +24,10 @@ struct Options {
   // next); none: the defaults (G17 G21 G90 G54 G64 G80).
   std::optional<ModalState> modal;
   ToolTable tools;  // --tool-table FILE: replaces the machine's [[tools]] entries it lists
+  // A tool missing from the table is an error (default: when the machine or `tools` lists any).
+  std::optional<bool> tools_listed;
+  // The operator's block delete switch: on, lines starting with "/" are skipped; off, they run.
+  bool block_delete = true;
 };
 
 // What LinuxCNC's canonical positions leave out of a block's machine coordinates: the program
@@ -65,6 +69,9 @@ class Interpreter {
   std::map<int, double> numbered_parameters(int first, int last) const;
   // The modal state as it stands now (see Options::modal).
   ModalState modal_state() const;
+  // The tool table as it stands now: the machine's and Options::tools entries with the program's
+  // G10 L1/L10/L11 writes (a controller keeps it between programs and across restarts).
+  const ToolTable& tool_table() const;
 
   // The frame of the block next() handed out last (for CanonPrinter).
   CanonFrame canon_frame() const;

@@ -204,6 +204,8 @@ struct Interpreter::Impl final : LiveParameters {
   Block base_block(BlockKind kind) const;
   void emit_aux(char letter, double value, bool waits);
   bool read_live(int number, double& value) const override;
+  // A "/" line while the block delete switch is on.
+  bool skipped() const { return line_.block_delete && block_delete_; }
   [[noreturn]] void fail(std::uint32_t col, const std::string& message) const {
     ctx_.fail(col, message);
   }
@@ -248,6 +250,7 @@ struct Interpreter::Impl final : LiveParameters {
 
   std::string file_;
   MachineConfig machine_;
+  bool block_delete_ = true;
   LineReader reader_;
   NormLine line_;
   ErrorContext ctx_;
@@ -263,6 +266,7 @@ struct Interpreter::Impl final : LiveParameters {
   bool beyond_travel_ = false;
 
   ToolTable tools_;
+  ToolTable implicit_tools_;         // tools used without a table: zero offsets
   bool tool_table_given_ = false;    // a table was configured: T of an unlisted tool is an error
   std::uint32_t selected_tool_ = 0;  // T: the tool the next M6 loads
   AxisVec tool_offset_{};            // the active tool length offset (G43…), mm / deg

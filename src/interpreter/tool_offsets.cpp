@@ -27,7 +27,7 @@ void Interpreter::Impl::init_tools(const Options& options) {
     tools_[t.number] = e;
   }
   for (const auto& [number, entry] : options.tools) tools_[number] = entry;
-  tool_table_given_ = !tools_.empty();
+  tool_table_given_ = options.tools_listed.value_or(!tools_.empty());
 }
 
 // The entry of tool `number`. Without any table every tool exists, with zero offsets (as in
@@ -41,7 +41,8 @@ const ToolEntry& Interpreter::Impl::tool_entry(double number, std::uint32_t col,
   if (tool_table_given_ && n != 0) {
     fail(col, fmt::format("tool {} is not in the tool table", n));
   }
-  ToolEntry& e = tools_[n];
+  // Kept apart from the table: only real entries are carried to the next program.
+  ToolEntry& e = implicit_tools_[n];
   e.number = n;
   return e;
 }

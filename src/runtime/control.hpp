@@ -24,10 +24,13 @@
 
 namespace cncore::runtime {
 
-// Operator switches (they act on programs started after the change; optional stop at once).
+// Operator switches. Optional stop acts at once; single block from the next block the kernel
+// takes in (the blocks it already plans ahead run on); block delete on programs started after
+// the change.
 struct Switches {
   bool optional_stop = false;  // M1 pauses like M0
   bool single_block = false;   // pause after every motion block (cycle start goes on)
+  bool block_delete = true;    // lines starting with "/" are skipped
   friend bool operator==(const Switches&, const Switches&) = default;
 };
 

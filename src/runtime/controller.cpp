@@ -55,6 +55,7 @@ struct Controller::Impl {
     if (!state_dir.empty()) {
       const PersistentState ps = load_state(state_dir);
       params = ps.parameters;
+      tools = ps.tools;
       if (ps.has_position) start = ps.position;
       last_saved = ps;
     }
@@ -165,6 +166,7 @@ struct Controller::Impl {
     const interp::ModalState m = in.modal_state();
     const std::lock_guard lock(data);
     params = std::move(p);
+    tools = in.tool_table();
     modal = completed ? std::optional<interp::ModalState>(m) : std::nullopt;
     work_offset = work_offset_from(params);
     if (!error.empty()) messages.push_back(error);
@@ -177,6 +179,7 @@ struct Controller::Impl {
     {
       const std::lock_guard lock(data);
       ps.parameters = params;
+      ps.tools = tools;
     }
     ps.position = st.commanded;
     ps.has_position = true;
@@ -235,6 +238,10 @@ struct Controller::Impl {
     const std::lock_guard lock(data);
     o.params = params;
     o.modal = modal;
+    o.block_delete = switches.block_delete;
+    o.tools = tools;
+    // Unknown tools are errors when the machine lists its tools (G10 writes do not change that).
+    o.tools_listed = !machine.cutting.tools.empty();
     return o;
   }
 
@@ -269,6 +276,7 @@ struct Controller::Impl {
   std::uint64_t command_seq = 0;  // under `control`
   std::mutex data;                // what the planning thread and the control methods share
   std::map<int, double> params;
+  ToolTable tools;                          // carried like params (G10 L1/L10/L11 writes)
   std::optional<interp::ModalState> modal;  // carried from one job to the next
   AxisVec work_offset;
   std::deque<std::string> messages;
@@ -292,24 +300,23 @@ Result Controller::Impl::start_job(Command command,
   const MachineConfig m = machine_at(st);
   motion::KernelOptions ko = motion::kernel_options_for(m);
   ko.override_pct = st.feed_override_pct;
-  // Single block: every block ends with an exact stop (no merging across it), and the job source
-  // puts a program stop after it.
+  // Single block at the start: no block is merged across (each ends with an exact stop), and
+  // feed_one puts a program stop after each.
   sim::OperatorModes modes;
   modes.single_block = switches.single_block;
   auto source = std::make_unique<JobSource>(
-      std::make_unique<sim::BlockSource>(std::move(interpreter), name, m, ko, modes),
-      switches.single_block);
+      std::make_unique<sim::BlockSource>(std::move(interpreter), name, m, ko, modes));
   auto job = std::make_unique<Job>(m, ko, options.block_ring);
   job->serial = next_serial++;
   // The kernel starts full, as `cncore run` fills it before its first cycle.
-  Block b;
   bool ended = false;
   while (job->kernel.wants_block()) {
-    const auto s = source->next(b);
-    if (s == sim::BlockSource::Status::kBlock) {
-      job->kernel.push(b);
-      continue;
-    }
+    auto s = sim::BlockSource::Status::kBlock;
+    const bool fed = feed_one(*job, switches.single_block, [&](Block& next) {
+      s = source->next(next);
+      return s == sim::BlockSource::Status::kBlock;
+    });
+    if (fed) continue;
     if (s == sim::BlockSource::Status::kInputError) {
       try {
         std::rethrow_exception(source->source().error());
@@ -392,9 +399,11 @@ Result Controller::cycle_start() {
   if (st.state == MachineState::kRun) return {};
   const MachineConfig m = d.machine_at(st);
   const interp::Options io = d.interpreter_options();
-  if (st.state == MachineState::kCheck) {
-    const std::string error =
-        d.check_program([&] { return std::make_unique<interp::Interpreter>(path, m, io); });
+  // Checked again as a whole before motion: MDI lines, the tool or the block delete switch may
+  // have changed what the program does since it was loaded.
+  const std::string error =
+      d.check_program([&] { return std::make_unique<interp::Interpreter>(path, m, io); });
+  if (st.state == MachineState::kCheck || !error.empty()) {
     return error.empty() ? Result{} : Result::fail(error);
   }
   try {

@@ -208,19 +208,14 @@ void CycleLoop::retire_job() {
 void CycleLoop::feed_kernel() {
   Job& j = *job_;
   if (ended_sent_) return;
-  Block b;
+  const bool single_block = status_.switches.single_block;
+  auto from_ring = [&j](Block& b) { return j.ring.try_pop(b); };
   for (int k = 0; k < kMaxPushesPerCycle && j.kernel.wants_block(); ++k) {
-    if (j.ring.try_pop(b)) {
-      j.kernel.push(b);
-      continue;
-    }
+    if (feed_one(j, single_block, from_ring)) continue;
     // The planner publishes its end after its last block: look at the ring once more.
     if (j.produced_all.load(std::memory_order_acquire) ||
         j.failed.load(std::memory_order_acquire)) {
-      if (j.ring.try_pop(b)) {
-        j.kernel.push(b);
-        continue;
-      }
+      if (feed_one(j, single_block, from_ring)) continue;
       j.kernel.end_of_program();
       ended_sent_ = true;
       break;
@@ -253,8 +248,11 @@ void CycleLoop::program_cycle(motion::Sample& s) {
   }
   status_.line = s.line;
   speed_mm_s_ = s.feed_mm_min / 60;
-  const bool pause = s.aux_letter == 'M' &&
-                     (s.aux_value == 0 || (s.aux_value == 1 && status_.switches.optional_stop));
+  const bool single_block_pause = s.aux_value == 0 && s.aux_p == kSingleBlockPause;
+  const bool pause =
+      s.aux_letter == 'M' &&
+      ((s.aux_value == 0 && (!single_block_pause || status_.switches.single_block)) ||
+       (s.aux_value == 1 && status_.switches.optional_stop));
   if (pause && status_.state == MachineState::kRun) {
     j.kernel.set_feed_hold(true);
     status_.state = MachineState::kHold;

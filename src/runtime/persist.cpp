@@ -56,6 +56,17 @@ PersistentState load_state(const std::string& dir) {
       throw InputError(path, 1, 1, "not a cncore machine state file (format)");
     }
     for (const auto& [k, v] : j.at("parameters").items()) s.parameters[std::stoi(k)] = v;
+    if (j.contains("tools")) {
+      for (const auto& t : j.at("tools")) {
+        ToolEntry e;
+        e.number = t.at("number");
+        e.pocket = t.at("pocket");
+        const auto& off = t.at("offset_mm");
+        for (std::size_t i = 0; i < kMaxAxes && i < off.size(); ++i) e.offset_mm[i] = off[i];
+        e.diameter_mm = t.at("diameter_mm");
+        s.tools[e.number] = e;
+      }
+    }
     if (j.contains("position")) {
       const auto& p = j.at("position");
       for (std::size_t i = 0; i < kMaxAxes && i < p.size(); ++i) s.position[i] = p[i];
@@ -77,6 +88,13 @@ void save_state(const std::string& dir, const PersistentState& state) {
   j["format"] = "cncore-machine-state-1";
   j["parameters"] = nlohmann::json::object();
   for (const auto& [n, v] : state.parameters) j["parameters"][std::to_string(n)] = v;
+  j["tools"] = nlohmann::json::array();
+  for (const auto& [n, e] : state.tools) {
+    j["tools"].push_back({{"number", e.number},
+                          {"pocket", e.pocket},
+                          {"offset_mm", e.offset_mm},
+                          {"diameter_mm", e.diameter_mm}});
+  }
   if (state.has_position) j["position"] = state.position.v;
   const std::string path = state_file(dir);
   const std::string temp = path + ".tmp";

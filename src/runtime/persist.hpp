@@ -1,19 +1,21 @@
 // The machine state that outlives the process (`cncore serve --state-dir`): the interpreter's
 // persistent parameters (LinuxCNC's 5161…5390: G28/G30 positions, G92, the work offsets
-// G54…G59.3 and the active system) and the last machine position. One JSON file, replaced
-// atomically (temporary + fsync + rename + fsync of the folder): a crash at any moment leaves
-// the old file or the new one, never a broken one.
+// G54…G59.3 and the active system), the tool table and the last machine position. One JSON file,
+// replaced atomically (temporary + fsync + rename + fsync of the folder): a crash at any moment
+// leaves the old file or the new one, never a broken one.
 #pragma once
 
 #include <map>
 #include <string>
 
+#include "config/tool_table.hpp"
 #include "core/geometry.hpp"
 
 namespace cncore::runtime {
 
 struct PersistentState {
   std::map<int, double> parameters;
+  ToolTable tools;  // the machine's [[tools]] with the G10 L1/L10/L11 writes
   AxisVec position;
   bool has_position = false;
   friend bool operator==(const PersistentState&, const PersistentState&) = default;

@@ -299,5 +299,30 @@ TEST(Controller, OffsetsAndPositionPersistAcrossRestarts) {
   EXPECT_EQ(again.c().status().commanded[kX], 12.5);
 }
 
+TEST(Controller, ToolTableWritesCarryToTheNextProgramAndAcrossRestarts) {
+  const auto dir = std::filesystem::path(CNCORE_TEST_TMP_DIR) / "controller-tools";
+  std::filesystem::remove_all(dir);
+  ControllerOptions o = Served::default_options();
+  o.state_dir = dir.string();
+  MachineConfig m = default_machine_config();
+  m.start_position = {0, 0, 50, 0, 0, 0};
+  {
+    Served sv(m, o);
+    ASSERT_TRUE(sv.c().mdi("G10 L1 P3 Z20 R4").ok);
+    ASSERT_TRUE(sv.wait_state(MachineState::kIdle));
+    // The next MDI line (a job of its own) finds tool 3's length: Z0 puts the tip at 0, the
+    // controlled point 20 mm above.
+    ASSERT_TRUE(sv.c().mdi("T3 M6 G43 H3 G90 G0 Z0").ok);
+    ASSERT_TRUE(sv.wait_state(MachineState::kIdle));
+    EXPECT_EQ(sv.c().status().commanded[kZ], 20);
+    ASSERT_TRUE(sv.c().mdi("G49 G0 Z30").ok);
+    ASSERT_TRUE(sv.wait_state(MachineState::kIdle));
+  }
+  Served again(m, o);
+  ASSERT_TRUE(again.c().mdi("T3 M6 G43 H3 G90 G0 Z5").ok);
+  ASSERT_TRUE(again.wait_state(MachineState::kIdle));
+  EXPECT_EQ(again.c().status().commanded[kZ], 25);
+}
+
 }  // namespace
 }  // namespace cncore::runtime
