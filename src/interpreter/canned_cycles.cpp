@@ -102,6 +102,9 @@ void Interpreter::Impl::cycle_body(std::size_t drill_axis, double r_mm, double b
 // words once per repeat, R is relative to the height at the start and Z to R.
 void Interpreter::Impl::canned_cycle(std::uint32_t col) {
   const Words& w = words_;
+  if (modal_.feed_mode == FeedMode::kInverseTime) {
+    fail(col, "canned cycles cannot run in G93 inverse time mode: program G94 first");
+  }
   const PlaneAxes pa = plane_axes(modal_.plane);
   const std::size_t n = pa.normal;
   const char drill_word = kAxisWords[n];

@@ -85,6 +85,8 @@ CodeInfo g_code_info(int code10) {
       return ok(GGroup::kToolLength, "added tool length offset");
     case 490:
       return ok(GGroup::kToolLength, "tool length offset off");
+    case 520:
+      return ok(GGroup::kNonModal, "local coordinate offset");
     case 530:
       return ok(GGroup::kNonModal, "move in machine coordinates");
     case 540:
@@ -140,11 +142,11 @@ CodeInfo g_code_info(int code10) {
     case 923:
       return ok(GGroup::kNonModal, "restore the G92 offset");
     case 930:
-      return no(GGroup::kFeedMode, "inverse time feed");
+      return ok(GGroup::kFeedMode, "inverse time feed");
     case 940:
       return ok(GGroup::kFeedMode, "units per minute feed");
     case 950:
-      return no(GGroup::kFeedMode, "feed per revolution");
+      return ok(GGroup::kFeedMode, "feed per revolution");
     case 960:
       return no(GGroup::kSpindleMode, "constant surface speed");
     case 970:

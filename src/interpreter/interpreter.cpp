@@ -302,7 +302,8 @@ void Interpreter::Impl::execute_words() {
   if (const auto* u = w.group(GGroup::kUnits)) inch = u->code10 == 200;
   const double unit = inch ? 25.4 : 1.0;
 
-  feed_and_speed(unit);  // 4 F, 5 S
+  if (const auto* g = w.group(GGroup::kFeedMode)) set_feed_mode(g->code10);  // 3 feed mode
+  feed_and_speed(unit);                                                      // 4 F, 5 S
   // 6 T (select: the tool is prepared; M6 makes it current), 8 M6 / M61
   if (w.has('t')) select_tool();
   if (const auto* m = w.mgroup(MGroup::kToolChange)) change_tool(*m);
@@ -366,7 +367,8 @@ void Interpreter::Impl::execute_words() {
           ? tool_word->code10  // G43.1, G43.2 take offsets from axis words
           : nm;
   const bool axes_for_nonmodal = axes_user == 100 || axes_user == 280 || axes_user == 300 ||
-                                 axes_user == 920 || axes_user == 431 || axes_user == 432;
+                                 axes_user == 520 || axes_user == 920 || axes_user == 431 ||
+                                 axes_user == 432;
   if (axes_for_nonmodal && motion_word != nullptr && motion_word->code10 != 800 && have_axes) {
     fail(motion_word->col,
          fmt::format("{} and {} both use the axis words", code_text('G', axes_user),
@@ -374,7 +376,7 @@ void Interpreter::Impl::execute_words() {
   }
 
   // 24 offsets and homing
-  if (nm == 100 || nm == 920 || nm == 921 || nm == 922 || nm == 923) set_offsets();
+  if (nm == 100 || nm == 520 || nm == 920 || nm == 921 || nm == 922 || nm == 923) set_offsets();
   if (nm == 280 || nm == 281 || nm == 300 || nm == 301) go_home(nm);
 
   // 25 motion
@@ -432,16 +434,31 @@ void Interpreter::Impl::execute_motion(const Words::Code* nonmodal, bool axes_fo
   }
 }
 
-// Steps 4 and 5: F (in the block's units per minute) and S.
+// Step 3: G93, G94, G95. A change of mode asks for a new F (its meaning changed).
+void Interpreter::Impl::set_feed_mode(int code10) {
+  const FeedMode mode = code10 == 930   ? FeedMode::kInverseTime
+                        : code10 == 950 ? FeedMode::kPerRevolution
+                                        : FeedMode::kPerMinute;
+  if (mode != modal_.feed_mode) modal_.feed_set = false;
+  modal_.feed_mode = mode;
+}
+
+// Steps 4 and 5: F (in the feed mode's units: the block's length unit per minute or per
+// revolution; in G93 the inverse of the move's time in minutes, read by the move) and S.
 void Interpreter::Impl::feed_and_speed(double unit) {
   const Words& w = words_;
   if (w.has('f')) {
     if (w['f'].value < 0) fail(w['f'].col, "negative feed rate F");
-    modal_.feed_mm_min = w['f'].value * unit;
+    if (modal_.feed_mode == FeedMode::kPerRevolution) {
+      modal_.feed_mm_rev = w['f'].value * unit;
+    } else if (modal_.feed_mode == FeedMode::kPerMinute) {
+      modal_.feed_mm_min = w['f'].value * unit;
+    }
     modal_.feed_set = true;
   }
   if (w.has('s')) {
     if (w['s'].value < 0) fail(w['s'].col, "negative spindle speed S");
+    modal_.spindle_rpm = w['s'].value;
     emit_aux('S', w['s'].value, false);
   }
 }

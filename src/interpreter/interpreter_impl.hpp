@@ -186,6 +186,9 @@ struct Interpreter::Impl final : LiveParameters {
   void set_motion_mode(int code10);
   void dwell(std::uint32_t col);  // G4
   void feed_and_speed(double unit);
+  void set_feed_mode(int code10);  // G93, G94, G95
+  // The path feed of a programmed feed move of `length_mm` in the feed mode (motion.cpp).
+  double move_feed_mm_min(double length_mm, std::uint32_t col) const;
   void execute_motion(const Words::Code* nonmodal, bool axes_for_nonmodal, bool have_axes,
                       std::uint32_t first_axis_col);
   void execute_stops();
@@ -266,8 +269,10 @@ struct Interpreter::Impl final : LiveParameters {
   bool beyond_travel_ = false;
 
   ToolTable tools_;
-  ToolTable implicit_tools_;         // tools used without a table: zero offsets
-  bool tool_table_given_ = false;    // a table was configured: T of an unlisted tool is an error
+  ToolTable implicit_tools_;
+  double move_feed_mm_min_ = 0;    // the feed of the programmed move being emitted         // tools
+                                   // used without a table: zero offsets
+  bool tool_table_given_ = false;  // a table was configured: T of an unlisted tool is an error
   std::uint32_t selected_tool_ = 0;  // T: the tool the next M6 loads
   AxisVec tool_offset_{};            // the active tool length offset (G43…), mm / deg
 

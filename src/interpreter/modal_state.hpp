@@ -13,6 +13,10 @@ namespace cncore::interp {
 // G80 G0 G1 G2 G3, and a canned cycle (G73 G74 G81…G89: ModalState::cycle holds which).
 enum class Motion : std::uint8_t { kNone, kRapid, kLine, kArcCw, kArcCcw, kCycle };
 
+// Group 5: what F means. G93: the move takes 1/F minutes (an F on every feed move's line);
+// G94: mm (or inch) per minute; G95: mm (or inch) per spindle revolution, at the last S.
+enum class FeedMode : std::uint8_t { kInverseTime, kPerMinute, kPerRevolution };
+
 struct ModalState {
   Motion motion = Motion::kNone;          // group 1 (LinuxCNC starts in G80)
   Plane plane = Plane::kXY;               // group 2: G17
@@ -32,10 +36,13 @@ struct ModalState {
   double cycle_r = 0, cycle_z = 0, cycle_p = 0, cycle_q = 0;
   bool cycle_r_set = false, cycle_z_set = false;
 
-  double feed_mm_min = 0;      // F, converted to mm/min when it is read
-  bool feed_set = false;       // an F word has been seen
-  int tool = 0;                // T of the last M6 (tool in the spindle)
-  int tool_length_code = 490;  // group 8: G49 (430 G43, 431 G43.1, 432 G43.2)
+  FeedMode feed_mode = FeedMode::kPerMinute;  // group 5: G94
+  double feed_mm_min = 0;                     // F in G94, converted to mm/min when it is read
+  double feed_mm_rev = 0;                     // F in G95, mm per spindle revolution
+  bool feed_set = false;                      // an F word has been seen in the current feed mode
+  double spindle_rpm = 0;                     // the last S word
+  int tool = 0;                               // T of the last M6 (tool in the spindle)
+  int tool_length_code = 490;                 // group 8: G49 (430 G43, 431 G43.1, 432 G43.2)
 
   double length_unit_mm() const { return inch ? 25.4 : 1.0; }
 };

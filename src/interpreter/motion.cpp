@@ -65,7 +65,7 @@ void Interpreter::Impl::emit_motion(BlockKind kind, const AxisVec& target, std::
   Block b = base_block(kind);
   b.end = target;
   b.col = col;
-  b.feed_mm_min = kind == BlockKind::kRapid ? 0 : modal_.feed_mm_min;
+  b.feed_mm_min = kind == BlockKind::kRapid ? 0 : move_feed_mm_min_;
   b.path_mode =
       words_.group(GGroup::kExactStopOnce) != nullptr ? PathMode::kExactStop : modal_.path_mode;
   b.tolerance_mm = b.path_mode == PathMode::kBlend ? modal_.tolerance_mm : -1;
@@ -76,13 +76,17 @@ void Interpreter::Impl::emit_motion(BlockKind kind, const AxisVec& target, std::
 // G0/G1 to `target` (machine coordinates).
 void Interpreter::Impl::line_motion(const AxisVec& target, std::uint32_t col) {
   const bool rapid = modal_.motion == Motion::kRapid;
-  if (!rapid && !modal_.feed_set) {
-    fail(col, "no feed rate: program F before the first G1/G2/G3");
+  // G93's length: over X Y Z, or over the rotary axes for a rotary-only move (LinuxCNC's rule).
+  double linear2 = 0, rotary2 = 0;
+  for (std::size_t a = 0; a < kMaxAxes; ++a) {
+    const double d2 = (target[a] - pos_[a]) * (target[a] - pos_[a]);
+    (is_rotary(a) ? rotary2 : linear2) += d2;
   }
-  if (!rapid && modal_.feed_mm_min <= 0) fail(col, "feed rate F is zero");
+  if (!rapid) {
+    move_feed_mm_min_ = move_feed_mm_min(std::sqrt(linear2 > 0 ? linear2 : rotary2), col);
+  }
   check_travel(target, target, target, col);
-  double len2 = 0;
-  for (std::size_t a = 0; a < kMaxAxes; ++a) len2 += (target[a] - pos_[a]) * (target[a] - pos_[a]);
+  const double len2 = linear2 + rotary2;
   if (len2 > kZeroMoveMm * kZeroMoveMm) {
     emit_motion(rapid ? BlockKind::kRapid : BlockKind::kLine, target, col);
   }
@@ -94,8 +98,7 @@ void Interpreter::Impl::line_motion(const AxisVec& target, std::uint32_t col) {
 void Interpreter::Impl::arc(const AxisVec& target, bool ccw, std::uint32_t col) {
   const Words& w = words_;
   const char* g = ccw ? "G3" : "G2";
-  if (!modal_.feed_set) fail(col, "no feed rate: program F before the first G1/G2/G3");
-  if (modal_.feed_mm_min <= 0) fail(col, "feed rate F is zero");
+  move_feed_mm_min(0, col);  // the feed errors first, as for G1
   const PlaneAxes pa = plane_axes(modal_.plane);
   const double unit = modal_.length_unit_mm();
   const Vec2 s{pos_[pa.first], pos_[pa.second]};
@@ -171,6 +174,11 @@ void Interpreter::Impl::arc(const AxisVec& target, bool ccw, std::uint32_t col) 
     hi[pa.second] = hi2.b;
   }
   check_travel(lo, hi, target, col);
+  // G93's length: the arc's (the radius at the start, or a spiral's mean) with the helix rise.
+  const double sweep_rad = arc_sweep(s, e, c, ccw, turns);
+  const double rise_mm = target[pa.normal] - pos_[pa.normal];
+  const double mean_r = 0.5 * (std::hypot(s.a - c.a, s.b - c.b) + std::hypot(e.a - c.a, e.b - c.b));
+  move_feed_mm_min_ = move_feed_mm_min(std::hypot(mean_r * sweep_rad, rise_mm), col);
 
   if (spiral) {
     arc_spiral(target, programmed, ccw, turns, col);
@@ -189,7 +197,7 @@ void Interpreter::Impl::emit_arc(const AxisVec& target, Vec2 c, bool ccw, std::u
   Block b = base_block(BlockKind::kArc);
   b.col = col;
   b.end = target;
-  b.feed_mm_min = modal_.feed_mm_min;
+  b.feed_mm_min = move_feed_mm_min_;
   b.path_mode =
       words_.group(GGroup::kExactStopOnce) != nullptr ? PathMode::kExactStop : modal_.path_mode;
   b.tolerance_mm = b.path_mode == PathMode::kBlend ? modal_.tolerance_mm : -1;
@@ -242,6 +250,28 @@ void Interpreter::Impl::arc_spiral(const AxisVec& target, Vec2 c, bool ccw, std:
     emit_arc(p, pc, ccw, 0, col);
     pos_ = p;
   }
+}
+
+double Interpreter::Impl::move_feed_mm_min(double length_mm, std::uint32_t col) const {
+  const Words& w = words_;
+  switch (modal_.feed_mode) {
+    case FeedMode::kInverseTime:
+      // F = 1 / (the move's time in minutes): v = length · F.
+      if (!w.has('f')) fail(col, "G93 inverse time: every G1/G2/G3 line needs its F word");
+      if (w['f'].value <= 0) fail(w['f'].col, "feed rate F is zero");
+      return length_mm * w['f'].value;
+    case FeedMode::kPerRevolution:
+      // v = F (mm/rev) · S (rev/min).
+      if (!modal_.feed_set) fail(col, "no feed rate: program F (per revolution) after G95");
+      if (modal_.feed_mm_rev <= 0) fail(col, "feed rate F is zero");
+      if (modal_.spindle_rpm <= 0) fail(col, "G95 feed per revolution without a spindle speed S");
+      return modal_.feed_mm_rev * modal_.spindle_rpm;
+    case FeedMode::kPerMinute:
+      break;
+  }
+  if (!modal_.feed_set) fail(col, "no feed rate: program F before the first G1/G2/G3");
+  if (modal_.feed_mm_min <= 0) fail(col, "feed rate F is zero");
+  return modal_.feed_mm_min;
 }
 
 }  // namespace cncore::interp

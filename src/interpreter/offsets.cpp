@@ -53,6 +53,15 @@ void Interpreter::Impl::set_offsets() {
       }
       break;
     }
+    case 520:
+      // G52: a local offset of the active system. LinuxCNC keeps it in the G92 registers; the
+      // values are the offset itself (G90/G91 do not apply), G52 X0 Y0 … clears it.
+      for (std::size_t a = 0; a < kMaxAxes; ++a) {
+        if (w[kAxisWords[a]].present)
+          params_.set_numbered(kParamG92 + static_cast<int>(a), scaled(a));
+      }
+      params_.set_numbered(kParamG92Applied, 1);
+      break;
     case 920: {
       bool any = false;
       // G92: pos = value + work + g92 + tool  →  g92 = pos − work − tool − value, for the
