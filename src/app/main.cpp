@@ -261,6 +261,20 @@ int main_cli(int argc, char** argv) {
   serve->add_option("--http", sa.http, "Operator web page")->type_name("ADDR");
   serve->add_option("--mtconnect", sa.mtconnect, "MTConnect SHDR adapter (read-only telemetry)")
       ->type_name("HOST:PORT");
+  serve
+      ->add_option("--mqtt", sa.mqtt,
+                   "Publish telemetry to an MQTT broker (mqtts:// for TLS; subscribes to nothing)")
+      ->type_name("URL");
+  serve->add_option("--mqtt-user", sa.mqtt_user, "MQTT user name")->type_name("NAME");
+  serve
+      ->add_option("--mqtt-password-file", sa.mqtt_password_file,
+                   "File whose first line is the MQTT password")
+      ->type_name("FILE");
+  serve->add_option("--mqtt-ca", sa.mqtt_ca, "CA certificates of the broker (mqtts://)")
+      ->type_name("FILE.pem");
+  serve->add_option("--mqtt-rate", sa.mqtt_rate_hz, "MQTT samples per second (default 10)")
+      ->check(CLI::Range(0.1, 100.0))
+      ->type_name("HZ");
 
   LatencyArgs la;
   CLI::App* latency = app.add_subcommand(

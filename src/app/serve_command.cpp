@@ -1,5 +1,6 @@
 // `cncore serve`: the controller process (src/runtime) with its text console on standard input
-// and, when asked, the Grbl 1.1 endpoints (src/grbl) for senders.
+// and, when asked, the Grbl 1.1 endpoints (src/grbl) for senders and the telemetry publishers
+// (src/telemetry: MTConnect SHDR, MQTT).
 #include <poll.h>
 #include <unistd.h>
 
@@ -120,8 +121,38 @@ void load_grbl_settings(grbl::SettingsStore& store, MachineConfig& machine,
   store.settings.apply(machine);
 }
 
-void print_messages(runtime::Controller& c) {
+// The first line of --mqtt-password-file (a password kept out of the command line and `ps`).
+std::string read_password(const std::string& path) {
+  require_readable(path, "--mqtt-password-file");
+  std::ifstream f(path);
+  std::string line;
+  std::getline(f, line);
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  return line;
+}
+
+std::unique_ptr<telemetry::MqttPublisher> start_mqtt(const runtime::Controller& c,
+                                                     const ServeArgs& a) {
+  telemetry::MqttOptions o;
+  o.url = a.mqtt;
+  o.user = a.mqtt_user;
+  if (!a.mqtt_password_file.empty()) o.password = read_password(a.mqtt_password_file);
+  if (!a.mqtt_ca.empty()) require_readable(a.mqtt_ca, "--mqtt-ca");
+  o.ca_file = a.mqtt_ca;
+  o.sample_hz = a.mqtt_rate_hz;
+  o.program = a.program;
+  try {
+    return std::make_unique<telemetry::MqttPublisher>(c, o);
+  } catch (const std::runtime_error& e) {
+    throw UsageError(e.what());
+  }
+}
+
+void print_messages(runtime::Controller& c, telemetry::MqttPublisher* mqtt) {
   while (auto m = c.take_message()) std::cout << "msg: " << *m << "\n";
+  while (auto m = mqtt != nullptr ? mqtt->take_message() : std::nullopt) {
+    std::cout << "msg: " << *m << "\n";
+  }
   std::cout.flush();
 }
 
@@ -156,6 +187,8 @@ int command_serve(const ServeArgs& a) {
     shdr->set_program(a.program);
     std::cout << "mtconnect SHDR on port " << shdr->port() << "\n";
   }
+  std::unique_ptr<telemetry::MqttPublisher> mqtt;
+  if (!a.mqtt.empty()) mqtt = start_mqtt(controller, a);
   std::vector<std::unique_ptr<grbl::Endpoint>> endpoints;
   try {
     if (!a.grbl_tcp.empty()) {
@@ -178,7 +211,7 @@ int command_serve(const ServeArgs& a) {
       if (!s.ok) throw UsageError("--start: " + s.error);
     }
   }
-  print_messages(controller);
+  print_messages(controller, mqtt.get());
   bool stdin_open = true;
   bool quit = false;
   std::string pending;
@@ -202,7 +235,7 @@ int command_serve(const ServeArgs& a) {
         std::cout.flush();
       }
     }
-    print_messages(controller);
+    print_messages(controller, mqtt.get());
   }
   endpoints.clear();  // no sender acts during the stop
   if (recorder) {

@@ -34,6 +34,14 @@ struct Switches {
   friend bool operator==(const Switches&, const Switches&) = default;
 };
 
+// How the current or last program / MDI job ended.
+enum class JobEnd : std::uint8_t {
+  kRunning,    // not yet (or no job so far)
+  kCompleted,  // its last block ran
+  kReset,      // a reset stopped it
+  kAlarm,      // an alarm (E-stop, program error, soft limit, …) stopped it
+};
+
 // What the cycle thread publishes every cycle (a consistent copy: see Controller::status()).
 struct Status {
   MachineState state = MachineState::kIdle;
@@ -47,9 +55,15 @@ struct Status {
   std::uint64_t cycle = 0;             // cycles since the controller started
   std::uint64_t applied_commands = 0;  // commands the cycle has taken (see Controller)
   std::uint64_t job = 0;  // serial number of the program / MDI / jog / homing running or last run
-  AxisVec commanded;      // set-points sent to the servos (machine coordinates, mm or deg)
-  AxisVec actual;         // the servos' feedback
-  AxisVec work_offset;    // active work offset (G54…G59.3 + G92), as the planner last saw it
+  // The program or MDI job running or last run, as the cycle ran it: cycles of its first and
+  // latest sample (its cycle time is (last − first) · period, as `cncore run` counts it).
+  bool job_mdi = false;
+  JobEnd job_end = JobEnd::kRunning;
+  std::uint64_t job_first_cycle = 0;
+  std::uint64_t job_last_cycle = 0;
+  AxisVec commanded;    // set-points sent to the servos (machine coordinates, mm or deg)
+  AxisVec actual;       // the servos' feedback
+  AxisVec work_offset;  // active work offset (G54…G59.3 + G92), as the planner last saw it
   double following_error_mm = 0;  // largest |commanded − actual| over the axes this cycle
   std::uint32_t line = 0;         // program line under the tool (0: none)
   double feed_mm_min = 0;         // path speed this cycle

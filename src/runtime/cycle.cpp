@@ -74,7 +74,7 @@ void CycleLoop::apply(const CycleCommand& c, std::uint64_t n) {
     case Command::kStart:
     case Command::kMdi:
       if (c.job != nullptr && job_ == nullptr) {
-        start_job(c.job);
+        start_job(c.job, n, c.command == Command::kMdi);
       } else if (c.job != nullptr) {  // one job at a time: the planner frees this one
         c.job->cancel.store(true, std::memory_order_release);
         c.job->retired.store(true, std::memory_order_release);
@@ -183,8 +183,12 @@ void CycleLoop::apply_stop_or_move(const CycleCommand& c, bool moving_alone) {
   }
 }
 
-void CycleLoop::start_job(Job* job) {
+void CycleLoop::start_job(Job* job, std::uint64_t n, bool mdi) {
   job_ = job;
+  status_.job_mdi = mdi;
+  status_.job_end = JobEnd::kRunning;
+  status_.job_first_cycle = n;
+  status_.job_last_cycle = n;
   ended_sent_ = false;
   paused_by_program_ = false;
   status_.state = MachineState::kRun;
@@ -196,8 +200,9 @@ void CycleLoop::start_job(Job* job) {
   if (rapid_set_) job->kernel.set_rapid_override(status_.rapid_override_pct);
 }
 
-void CycleLoop::retire_job() {
+void CycleLoop::retire_job(JobEnd end) {
   if (job_ == nullptr) return;
+  status_.job_end = end;
   job_->cancel.store(true, std::memory_order_release);
   job_->retired.store(true, std::memory_order_release);
   job_ = nullptr;
@@ -232,7 +237,7 @@ void CycleLoop::program_cycle(motion::Sample& s) {
     const bool failed = j.failed.load(std::memory_order_acquire);
     const bool fatal = j.fatal.load(std::memory_order_acquire);
     const std::uint32_t line = j.error_line;
-    retire_job();
+    retire_job(failed || fatal ? JobEnd::kAlarm : JobEnd::kCompleted);
     status_.resetting = false;
     status_.hold_complete = false;
     s.position = status_.commanded;
@@ -262,7 +267,7 @@ void CycleLoop::program_cycle(motion::Sample& s) {
   status_.commanded = s.position;
   if (status_.state == MachineState::kHold) status_.hold_complete = still;
   if (status_.resetting && still) {
-    retire_job();
+    retire_job(JobEnd::kReset);
     status_.resetting = false;
     status_.hold_complete = false;
     status_.state = MachineState::kIdle;
@@ -365,7 +370,7 @@ void CycleLoop::homing_step() {
 }
 
 void CycleLoop::raise_alarm(AlarmCode alarm, std::uint32_t line) {
-  retire_job();
+  retire_job(JobEnd::kAlarm);
   line_ = LineMotion{};
   jog_pending_ = false;
   status_.resetting = false;
@@ -383,6 +388,7 @@ void CycleLoop::finish_outputs(std::uint64_t n, motion::Sample& s) {
     raise_alarm(AlarmCode::kFollowingError, status_.line);
   }
   status_.cycle = n;
+  if (job_ != nullptr) status_.job_last_cycle = n;
   status_.feed_mm_min = speed_mm_s_ * 60;
   status_.blocks_queued = job_ != nullptr ? static_cast<std::uint32_t>(job_->ring.size()) : 0;
   if (job_ == nullptr) status_.line = 0;

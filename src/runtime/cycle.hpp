@@ -47,8 +47,8 @@ class CycleLoop {
  private:
   void apply(const CycleCommand& c, std::uint64_t n);
   void apply_stop_or_move(const CycleCommand& c, bool moving_alone);
-  void start_job(Job* job);
-  void retire_job();
+  void start_job(Job* job, std::uint64_t n, bool mdi);
+  void retire_job(JobEnd end);
   void program_cycle(motion::Sample& s);
   void feed_kernel();
   void motion_cycle(motion::Sample& s);

@@ -11,8 +11,22 @@ namespace {
 using runtime::AlarmCode;
 using runtime::MachineState;
 
+// SHDR separates fields with '|' and lines with '\n': neither may appear in a value.
+std::string clean(std::string v) {
+  for (char& c : v) {
+    if (c == '|' || c == '\n' || c == '\r') c = ' ';
+  }
+  return v;
+}
+
+ShdrItem item(std::string key, std::string value) {
+  return {std::move(key), {std::move(value)}};
+}
+
+}  // namespace
+
 // MTConnect Execution: what the controller is doing with its program or motion.
-std::string execution(const runtime::Status& s) {
+std::string execution_name(const runtime::Status& s) {
   if (s.resetting) return "STOPPED";
   switch (s.state) {
     case MachineState::kRun:
@@ -32,7 +46,7 @@ std::string execution(const runtime::Status& s) {
 
 // MTConnect ControllerMode: programs run in AUTOMATIC (SEMI_AUTOMATIC with single block), jog
 // and homing in MANUAL, check mode is EDIT (programs are read, nothing moves).
-std::string controller_mode(const runtime::Status& s) {
+std::string controller_mode_name(const runtime::Status& s) {
   switch (s.state) {
     case MachineState::kJog:
     case MachineState::kHoming:
@@ -44,27 +58,13 @@ std::string controller_mode(const runtime::Status& s) {
   }
 }
 
-// SHDR separates fields with '|' and lines with '\n': neither may appear in a value.
-std::string clean(std::string v) {
-  for (char& c : v) {
-    if (c == '|' || c == '\n' || c == '\r') c = ' ';
-  }
-  return v;
-}
-
-ShdrItem item(std::string key, std::string value) {
-  return {std::move(key), {std::move(value)}};
-}
-
-}  // namespace
-
 std::vector<ShdrItem> mtconnect_items(const runtime::Status& s, const std::string& program) {
   std::vector<ShdrItem> items;
   items.reserve(16);
   items.push_back(item("avail", "AVAILABLE"));
   items.push_back(item("estop", s.alarm == AlarmCode::kEStop ? "TRIGGERED" : "ARMED"));
-  items.push_back(item("mode", controller_mode(s)));
-  items.push_back(item("execution", execution(s)));
+  items.push_back(item("mode", controller_mode_name(s)));
+  items.push_back(item("execution", execution_name(s)));
   items.push_back(item("program", program.empty() ? "UNAVAILABLE" : clean(program)));
   items.push_back(item("line", s.line == 0 ? "UNAVAILABLE" : fmt::format("{}", s.line)));
   // Machine coordinates, mm; 3 decimals (1 µm) so that a still axis does not flicker.
