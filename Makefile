@@ -97,6 +97,7 @@ test-sanitize: deps
 	RC_PARAMS="max_success=$(SANITIZE_RC_CASES)" \
 	ASAN_OPTIONS=halt_on_error=1:abort_on_error=1:detect_leaks=1:print_stacktrace=1:log_path=$(SANITIZER_LOGS)/asan \
 	UBSAN_OPTIONS=halt_on_error=1:abort_on_error=1:print_stacktrace=1 \
+	LSAN_OPTIONS=suppressions=$(CURDIR)/tools/lsan-suppressions.txt:print_suppressions=0 \
 	  bash tools/run-tests.sh build/asan || rc=$$?; \
 	reports=$$(find $(SANITIZER_LOGS) -type f | wc -l); \
 	if [ "$$reports" -gt 0 ]; then \
