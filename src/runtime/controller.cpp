@@ -16,6 +16,7 @@
 #include "runtime/pacing.hpp"
 #include "runtime/persist.hpp"
 #include "runtime/planning.hpp"
+#include "runtime/stream.hpp"
 
 namespace cncore::runtime {
 
@@ -251,8 +252,20 @@ struct Controller::Impl {
     return {};
   }
 
+  // prefill: fill the kernel before the first cycle (a program or MDI); a stream's kernel
+  // fills from the planning thread as lines arrive. made: told of the job before it runs.
   Result start_job(Command command, std::unique_ptr<interp::Interpreter> interpreter,
-                   const std::string& name, const Status& st);
+                   const std::string& name, const Status& st, bool prefill = true,
+                   const std::function<void(Job&)>& made = {});
+  StreamReply start_stream(const std::string& line, const Status& st);
+  void close_stream() {
+    std::shared_ptr<LineQueue> q;
+    {
+      const std::lock_guard lock(data);
+      q = stream;
+    }
+    if (q) q->close();
+  }
 
   MachineConfig machine;
   ControllerOptions options;
@@ -275,6 +288,9 @@ struct Controller::Impl {
   std::string state_dir;
   PersistentState last_saved;  // planning thread (housekeeping), then the destructor
   bool save_failed = false;
+  std::shared_ptr<LineQueue> stream;  // the stream running or last run (under `data`)
+  StreamChecker checker;              // under `control`
+  bool checker_in_check = false;      // `checker` follows lines checked in Check
   std::unique_ptr<PlanningThread> planning;
   // The cycle thread's own figures (its thread only, but for the published copy).
   Histogram wake_hist, work_hist;
@@ -288,7 +304,8 @@ struct Controller::Impl {
 
 Result Controller::Impl::start_job(Command command,
                                    std::unique_ptr<interp::Interpreter> interpreter,
-                                   const std::string& name, const Status& st) {
+                                   const std::string& name, const Status& st, bool prefill,
+                                   const std::function<void(Job&)>& made) {
   const MachineConfig m = machine_at(st);
   motion::KernelOptions ko = motion::kernel_options_for(m);
   ko.override_pct = st.feed_override_pct;
@@ -304,7 +321,8 @@ Result Controller::Impl::start_job(Command command,
   // The kernel starts full, as `cncore run` fills it before its first cycle.
   Block b;
   bool ended = false;
-  while (job->kernel.wants_block()) {
+  if (made) made(*job);
+  while (prefill && job->kernel.wants_block()) {
     const auto s = source->next(b);
     if (s == sim::BlockSource::Status::kBlock) {
       job->kernel.push(b);
@@ -334,6 +352,56 @@ Result Controller::Impl::start_job(Command command,
   // From here the cycle may use the job: the planning thread owns it until the cycle retires it.
   planning->add(std::move(job), std::move(source));
   return wait_taken(c.seq);
+}
+
+// A new stream from its first line: the checker starts from what the last job left, the
+// job's interpreter pulls the queue from the planning thread, and the kernel fills as lines
+// come (no prefill: the line after this one may not have been sent yet).
+StreamReply Controller::Impl::start_stream(const std::string& line, const Status& st) {
+  StreamChecker next;
+  {
+    const std::lock_guard lock(data);
+    next.modal = modal;
+    next.params = params;
+  }
+  next.position = st.commanded;
+  bool ends = false;
+  if (std::string e = next.check(line, machine, ends); !e.empty()) {
+    return {StreamOutcome::kRefused, std::move(e)};
+  }
+  auto queue = std::make_shared<LineQueue>(options.stream_lines,
+                                           std::chrono::milliseconds(options.stream_idle_end_ms));
+  (void)queue->push(line, ends);
+  checker = std::move(next);
+  // The queue closes when the interpreter pulling it goes (the stream's end, an error, a reset).
+  struct Closer {
+    explicit Closer(std::shared_ptr<LineQueue> q) : queue(std::move(q)) {}
+    std::shared_ptr<LineQueue> queue;
+    Closer(const Closer&) = delete;
+    Closer& operator=(const Closer&) = delete;
+    ~Closer() { queue->close(); }
+  };
+  auto closer = std::make_shared<Closer>(queue);
+  auto job_link = std::make_shared<std::atomic<const Job*>>(nullptr);
+  auto pull = [closer, job_link](std::string& out) {
+    const Job* j = job_link->load(std::memory_order_acquire);
+    return closer->queue->pull(out, j->cancel, [j] { return j->ring.size() == 0; });
+  };
+  const MachineConfig m = machine_at(st);
+  auto in = std::make_unique<interp::Interpreter>(interp::Interpreter::FromLines{}, std::move(pull),
+                                                  "stream", m, interpreter_options());
+  {
+    const std::lock_guard lock(data);
+    stream = queue;
+  }
+  const Result r =
+      start_job(Command::kMdi, std::move(in), "stream", st, false,
+                [&job_link](Job& j) { job_link->store(&j, std::memory_order_release); });
+  if (!r.ok) {
+    queue->close();
+    return {StreamOutcome::kRefused, r.error};
+  }
+  return {};
 }
 
 Controller::Controller(const MachineConfig& machine, const ControllerOptions& options)
@@ -427,15 +495,72 @@ Result Controller::mdi(const std::string& line) {
   }
 }
 
+StreamReply Controller::stream_line(const std::string& line) {
+  Impl& d = *impl_;
+  const std::lock_guard lock(d.control);
+  const Status st = d.status.load();
+  bool ends = false;
+  if (st.state == MachineState::kCheck) {
+    if (!d.checker_in_check) {
+      d.checker = StreamChecker{};
+      const std::lock_guard data_lock(d.data);
+      d.checker.modal = d.modal;
+      d.checker.params = d.params;
+      d.checker.position = st.commanded;
+    }
+    d.checker_in_check = true;
+    std::string e = d.checker.check(line, d.machine, ends);
+    return e.empty() ? StreamReply{} : StreamReply{StreamOutcome::kRefused, std::move(e)};
+  }
+  d.checker_in_check = false;
+  std::shared_ptr<LineQueue> queue;
+  {
+    const std::lock_guard data_lock(d.data);
+    queue = d.stream;
+  }
+  if (queue && !queue->closed()) {
+    if (queue->room() == 0) return {StreamOutcome::kWait, {}};
+    StreamChecker next = d.checker;  // kept only once the line is queued
+    if (std::string e = next.check(line, d.machine, ends); !e.empty()) {
+      return {StreamOutcome::kRefused, std::move(e)};
+    }
+    if (queue->push(line, ends) == LineQueue::Push::kTaken) {
+      d.checker = std::move(next);
+      return {};
+    }
+    // The stream ended meanwhile: this line starts the next one.
+  }
+  if (is_moving(st.state) || st.resetting) return {StreamOutcome::kWait, {}};
+  if (Result r = d.allowed(Command::kMdi); !r.ok) return {StreamOutcome::kRefused, r.error};
+  try {
+    return d.start_stream(line, st);
+  } catch (const InputError& e) {
+    return {StreamOutcome::kRefused, e.formatted()};
+  }
+}
+
+StreamRoom Controller::stream_room() const {
+  Impl& d = *impl_;
+  std::shared_ptr<LineQueue> queue;
+  {
+    const std::lock_guard data_lock(d.data);
+    queue = d.stream;
+  }
+  const std::size_t capacity = d.options.stream_lines;
+  return {queue && !queue->closed() ? queue->room() : capacity, capacity};
+}
+
 Result Controller::feed_hold() {
   return impl_->command(Command::kHold, true);
 }
 
 Result Controller::reset() {
+  impl_->close_stream();
   return impl_->command(Command::kReset, false);
 }
 
 Result Controller::estop() {
+  impl_->close_stream();
   return impl_->command(Command::kEStop, false);
 }
 
