@@ -111,7 +111,7 @@ struct ControllerOptions {
   // (homing finds it), mm per axis slot.
   AxisVec sim_position_error;
   // Streamed lines (Controller::stream_line): the queue's capacity, and how long the stream
-  // waits for a line, once the planner has nothing ahead of the tool, before it ends.
+  // waits for a line, once the tool stands at the end of what it was given, before it ends.
   std::size_t stream_lines = 64;
   int stream_idle_end_ms = 100;
 };
@@ -167,8 +167,8 @@ class Controller {
   // One line of a stream (a sender's program sent line by line): interpreted at once from the
   // state the lines before it left (an error refuses this line only, before anything moves),
   // then queued into one running job, so the look-ahead plans across the lines as it does for
-  // a program file. The stream ends when the queue has drained, the planner has nothing ahead
-  // of the tool and no line came for `stream_idle_end_ms`, or after a line with M2/M30; the
+  // a program file. The stream ends when the queue has drained, the tool stands at the end of
+  // what it was given and no line came for `stream_idle_end_ms`, or after a line with M2/M30; the
   // next line starts a new stream once the machine is idle. Reset, E-stop and alarms drop the
   // queued lines. In Check, lines are interpreted and nothing moves.
   StreamReply stream_line(const std::string& line);

@@ -385,7 +385,10 @@ StreamReply Controller::Impl::start_stream(const std::string& line, const Status
   auto job_link = std::make_shared<std::atomic<const Job*>>(nullptr);
   auto pull = [closer, job_link](std::string& out) {
     const Job* j = job_link->load(std::memory_order_acquire);
-    return closer->queue->pull(out, j->cancel, [j] { return j->ring.size() == 0; });
+    // The stream may end only where the tool has run out of blocks and stands (not held).
+    return closer->queue->pull(out, j->cancel, [j] {
+      return j->ring.size() == 0 && j->standing.load(std::memory_order_relaxed);
+    });
   };
   const MachineConfig m = machine_at(st);
   auto in = std::make_unique<interp::Interpreter>(interp::Interpreter::FromLines{}, std::move(pull),

@@ -62,7 +62,7 @@ bool LineQueue::pull(std::string& line, const std::atomic<bool>& cancel,
     }
     if (sealed_) closed_ = true;
     if (closed_) return false;
-    // Only once the tool is about to run out of planned blocks: a sender that pauses while the
+    // Only once the tool stands at the end of what it was given: a sender that pauses while the
     // machine has work ahead keeps its stream (and the look-ahead across the pause).
     if (std::chrono::steady_clock::now() - last_activity_ >= idle_end_ && may_end()) {
       closed_ = true;

@@ -33,8 +33,8 @@ class LineQueue {
   // `last`: the line ends the program (M2, M30): the queue takes nothing after it.
   Push push(std::string line, bool last);
   // The planning thread: the next line, waiting for it. False when the stream has ended: closed,
-  // cancelled, or no line for `idle_end` while `may_end()` (the planner has nothing left ahead
-  // of the tool). A false return closes the queue.
+  // cancelled, or no line for `idle_end` while `may_end()` (the tool has run out of planned
+  // blocks and stands). A false return closes the queue.
   bool pull(std::string& line, const std::atomic<bool>& cancel,
             const std::function<bool()>& may_end);
   // Ends the stream and drops its lines (reset, alarm).
