@@ -257,20 +257,20 @@ bool Connection::next_line(std::string& out) {
 
 bool Connection::gcode(const std::string& line, std::string& out) {
   const runtime::Status s = controller_.status();
-  if (moving(s.state) || s.resetting || door_ || startup_due_) return false;
+  if (s.resetting || door_ || startup_due_ || busy_) return false;
   if (sleep_ || s.state == MachineState::kAlarm) {
     error_out(out, Error::kSystemGcLock);
     return true;
   }
-  ++line_number_;
-  const runtime::Result r = controller_.mdi(line);
-  if (!r.ok) {
+  // Grbl's `ok` means the line is parsed and in the planner: here, checked and queued into the
+  // running stream (no room: the line waits in the receive buffer, which slows the sender).
+  const runtime::StreamReply r = controller_.stream_line(line);
+  if (r.outcome == runtime::StreamOutcome::kWait) return false;
+  if (r.outcome == runtime::StreamOutcome::kRefused) {
     line_out(out, fmt::format("[MSG:{}]", r.error));
     error_out(out, error_for(r.error));
     return true;
   }
-  running_line_ = line_number_;
-  busy_ = s.state != MachineState::kCheck;
   line_out(out, "ok");
   return true;
 }
@@ -298,7 +298,7 @@ bool Connection::dollar(const std::string& raw, std::string& out) {
   }
   if (line == "$I" || line.starts_with("$I=")) {
     line_out(out, "[VER:1.1h.cncore:]");
-    line_out(out, fmt::format("[OPT:V,{},{}]", kPlannerBlocks, kRxBufferBytes));
+    line_out(out, fmt::format("[OPT:V,{},{}]", controller_.stream_room().capacity, kRxBufferBytes));
     line_out(out, "ok");
     return true;
   }
@@ -515,10 +515,10 @@ void Connection::report_status(std::string& out) {
   in.door = door_;
   in.sleep = sleep_;
   in.mask = store_.settings.status_mask();
-  in.planner_blocks_free = kPlannerBlocks - (busy_ ? 1 : 0);
+  in.planner_blocks_free = static_cast<int>(controller_.stream_room().free_lines);
   in.rx_bytes_free =
       static_cast<int>(kRxBufferBytes - std::min<std::size_t>(rx_.size(), kRxBufferBytes));
-  in.line = busy_ ? running_line_ : 0;
+  in.line = moving(s.state) ? s.line : 0;
   in.spindle_override_pct = spindle_override_pct_;
   const bool wco_changed = s.work_offset.v != last_wco_.v;
   const bool ov_changed = last_ov_[0] != s.feed_override_pct ||

@@ -6,9 +6,11 @@
 //   appear and acted on at once, also when the receive buffer is full;
 // - the other bytes form lines in a 128-byte receive buffer (what character-counting senders
 //   count); each line is answered by exactly one `ok` or `error:N`, in order;
-// - a G-code line runs through cncore's interpreter as one MDI job once the job before it has
-//   ended; until then it stays in the receive buffer, so a sender that keeps sending is slowed
-//   by the buffer (Bf: in the status report) and never has a line dropped or mixed.
+// - a G-code line is checked by cncore's interpreter and queued into one running stream job
+//   (runtime::Controller::stream_line), so the look-ahead plans across the lines; `ok` when it
+//   is queued, as Grbl answers when a line is in its planner. While the queue is full the line
+//   stays in the receive buffer, so a sender that keeps sending is slowed by the buffer (Bf: in
+//   the status report) and never has a line dropped or mixed.
 #pragma once
 
 #include <cstdint>
@@ -24,7 +26,6 @@ namespace cncore::grbl {
 
 inline constexpr std::size_t kRxBufferBytes = 128;  // Grbl's serial receive buffer
 inline constexpr std::size_t kLineBytes = 256;      // longest line (grblHAL's line buffer)
-inline constexpr int kPlannerBlocks = 15;           // reported as the planner's capacity (Bf:)
 
 // Settings and startup lines shared by the connections of one process, with where they persist.
 struct SettingsStore {
@@ -67,15 +68,13 @@ class Connection {
   runtime::Controller& controller_;
   SettingsStore& store_;
   std::string rx_;       // bytes not yet taken as lines (real-time bytes removed)
-  bool busy_ = false;    // the last G-code line's job has not ended yet
+  bool busy_ = false;    // a $RST=# job has not ended yet
   bool homing_ = false;  // $H answered once homing ends
   bool door_ = false;    // safety door opened (0x84) and not yet resumed
   bool sleep_ = false;   // $SLP until soft reset
   bool startup_due_ = false;
   bool discard_line_ = false;  // an overlong line is being skipped to its end
   runtime::AlarmCode last_alarm_ = runtime::AlarmCode::kNone;
-  std::uint32_t line_number_ = 0;  // G-code lines received (Ln:)
-  std::uint32_t running_line_ = 0;
   int spindle_override_pct_ = 100;
   int reports_ = 0;
   AxisVec last_wco_;

@@ -613,6 +613,13 @@ Interpreter::Interpreter(FromText, std::string text, std::string name, const Mac
     : impl_(std::make_unique<Impl>(LineReader::from_text(std::move(text)), std::move(name), machine,
                                    options)) {}
 
+Interpreter::Interpreter(FromLines, LineReader::Pull pull, std::string name,
+                         const MachineConfig& machine, const Options& options)
+    : impl_(std::make_unique<Impl>(LineReader::pulled(std::move(pull)), std::move(name), machine,
+                                   options)) {
+  impl_->reader_.set_name(impl_->file_);
+}
+
 Interpreter::~Interpreter() = default;
 
 bool Interpreter::next(Block& out) {

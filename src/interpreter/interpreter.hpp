@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -45,6 +46,11 @@ class Interpreter {
   struct FromText {};
   Interpreter(FromText, std::string text, std::string name, const MachineConfig& machine,
               const Options& options);
+  // Interprets lines as `pull` hands them over (false: no more), blocking in next() while pull
+  // waits: a controller's streamed lines. Loops and subroutine calls are refused (no seeking).
+  struct FromLines {};
+  Interpreter(FromLines, std::function<bool(std::string& line)> pull, std::string name,
+              const MachineConfig& machine, const Options& options);
   ~Interpreter();
   Interpreter(const Interpreter&) = delete;
   Interpreter& operator=(const Interpreter&) = delete;

@@ -30,10 +30,19 @@ LineReader LineReader::from_text(std::string text) {
   return r;
 }
 
+LineReader LineReader::pulled(Pull pull) {
+  LineReader r;
+  r.pull_ = std::move(pull);
+  return r;
+}
+
 LineReader::LineReader(LineReader&& other) noexcept
     : file_(other.file_),
       text_(std::move(other.text_)),
       in_memory_(other.in_memory_),
+      pull_(std::move(other.pull_)),
+      pulled_line_(std::move(other.pulled_line_)),
+      name_(std::move(other.name_)),
       buf_(std::move(other.buf_)),
       buf_pos_(other.buf_pos_),
       buf_offset_(other.buf_offset_),
@@ -69,6 +78,14 @@ bool LineReader::next(std::string_view& line) {
 
 // Lines end at "\n", "\r\n" or a lone "\r" (old Mac editors and some controllers).
 bool LineReader::next_line(std::string_view& line) {
+  if (pull_) {
+    // Offsets count lines here: a pulled line has no place in a file.
+    if (!pull_(pulled_line_)) return false;
+    line = pulled_line_;
+    ++following_.offset;
+    ++following_.line;
+    return true;
+  }
   if (in_memory_) {
     const std::size_t pos = following_.offset;
     if (pos >= text_.size()) return false;
@@ -126,6 +143,12 @@ bool LineReader::next_line(std::string_view& line) {
 }
 
 void LineReader::seek(LinePos pos) {
+  if (pull_) {
+    if (pos.offset == following_.offset) return;
+    throw InputError(name_, current_.line, 0,
+                     "loops and subroutine calls cannot run in streamed lines (send a program "
+                     "file instead)");
+  }
   following_ = pos;
   if (in_memory_) return;
   // Reuse the current chunk when the target lies inside it (tight loops stay in memory).

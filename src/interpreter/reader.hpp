@@ -1,10 +1,13 @@
 // Streaming line reader for part programs: reads the file in fixed-size chunks and hands out
 // one line at a time, remembering the byte offset of every line so that loops and subroutine
 // calls can seek back. Memory is one chunk plus the longest line, whatever the file size.
+// A pulled reader takes its lines from a function (a controller's queue of streamed lines): it
+// cannot seek back, so loops and subroutine calls are refused there.
 #pragma once
 
 #include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <string_view>
 
@@ -22,6 +25,9 @@ class LineReader {
   static LineReader open_file(const std::string& path);
   // Reads text held in memory.
   static LineReader from_text(std::string text);
+  // Takes each line from `pull` (false: the input has ended); `pull` may block.
+  using Pull = std::function<bool(std::string& line)>;
+  static LineReader pulled(Pull pull);
 
   LineReader(LineReader&& other) noexcept;
   LineReader& operator=(LineReader&&) = delete;
@@ -36,7 +42,10 @@ class LineReader {
   // Position of the line that next() will return.
   LinePos following() const { return following_; }
   // Makes next() return the line at `pos` (a position previously obtained from this reader).
+  // A pulled reader can only stay where it is: it throws InputError(name, line, 0, …) otherwise.
   void seek(LinePos pos);
+  // The program name a pulled reader's seek error names.
+  void set_name(std::string name) { name_ = std::move(name); }
 
  private:
   LineReader() = default;
@@ -46,6 +55,9 @@ class LineReader {
   std::FILE* file_ = nullptr;
   std::string text_;  // the whole program when reading from memory
   bool in_memory_ = false;
+  Pull pull_;  // pulled reader
+  std::string pulled_line_;
+  std::string name_;
 
   std::string buf_;  // current chunk (file mode)
   std::size_t buf_pos_ = 0;

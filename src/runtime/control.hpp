@@ -127,6 +127,28 @@ struct ControllerOptions {
   // Simulated machine: where the axes really are relative to the controller's belief at start
   // (homing finds it), mm per axis slot.
   AxisVec sim_position_error;
+  // Streamed lines (Controller::stream_line): the queue's capacity, and how long the stream
+  // waits for a line, once the tool stands at the end of what it was given, before it ends.
+  std::size_t stream_lines = 64;
+  int stream_idle_end_ms = 100;
+};
+
+// What became of a streamed line.
+enum class StreamOutcome : std::uint8_t {
+  kAccepted,  // checked and queued: it will run (after the lines before it)
+  kRefused,   // an error in the line (Result::error); the stream goes on without it
+  kWait,      // no room now (the queue is full, or a job that is not this stream still runs)
+};
+
+struct StreamReply {
+  StreamOutcome outcome = StreamOutcome::kAccepted;
+  std::string error;
+};
+
+// Room in the stream's queue (lines): what a sender's buffer report shows.
+struct StreamRoom {
+  std::size_t free_lines = 0;
+  std::size_t capacity = 0;
 };
 
 class Controller {
@@ -159,6 +181,15 @@ class Controller {
   Result jog_cancel();
   Result home();
   Result mdi(const std::string& line);  // one or more lines of G-code, run at once
+  // One line of a stream (a sender's program sent line by line): interpreted at once from the
+  // state the lines before it left (an error refuses this line only, before anything moves),
+  // then queued into one running job, so the look-ahead plans across the lines as it does for
+  // a program file. The stream ends when the queue has drained, the tool stands at the end of
+  // what it was given and no line came for `stream_idle_end_ms`, or after a line with M2/M30; the
+  // next line starts a new stream once the machine is idle. Reset, E-stop and alarms drop the
+  // queued lines. In Check, lines are interpreted and nothing moves.
+  StreamReply stream_line(const std::string& line);
+  StreamRoom stream_room() const;
   Result set_feed_override(double pct);
   Result set_rapid_override(double pct);
   Result set_switches(const Switches& switches);

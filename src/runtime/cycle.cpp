@@ -264,6 +264,7 @@ void CycleLoop::program_cycle(motion::Sample& s) {
     paused_by_program_ = true;
   }
   const bool still = s.feed_mm_min == 0 && s.position == status_.commanded;
+  j.standing.store(still && status_.state == MachineState::kRun, std::memory_order_relaxed);
   status_.commanded = s.position;
   if (status_.state == MachineState::kHold) status_.hold_complete = still;
   if (status_.resetting && still) {

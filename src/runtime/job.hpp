@@ -36,8 +36,9 @@ struct Job {
   std::uint32_t pause_line = 0;
   std::uint32_t error_line = 0;
   // Cycle → planning thread.
-  std::atomic<bool> cancel{false};   // stop producing (reset, E-stop, alarm)
-  std::atomic<bool> retired{false};  // the cycle no longer touches the job: it may be freed
+  std::atomic<bool> cancel{false};    // stop producing (reset, E-stop, alarm)
+  std::atomic<bool> retired{false};   // the cycle no longer touches the job: it may be freed
+  std::atomic<bool> standing{false};  // running (not held) and the tool still this cycle
 };
 
 // A job's blocks: the program's (sim::BlockSource).

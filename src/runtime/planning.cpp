@@ -78,7 +78,8 @@ bool PlanningThread::produce(Work& w) {
     } else {
       j.produced_all.store(true, std::memory_order_release);
     }
-    finish_source(w, error, error.empty());
+    // A stream's source also ends when it is cancelled: that is no completed program.
+    finish_source(w, error, error.empty() && !j.cancel.load(std::memory_order_acquire));
     break;
   }
   return did;
