@@ -84,7 +84,8 @@ TEST(Stream, ACircleStreamedLineByLineRunsAsOneJobAtTheSpeedOfRun) {
   const double t_served = motion_time_s(served, m.period_s);
   const double t_run = motion_time_s(ref, m.period_s);
   EXPECT_GT(t_run, 6.0);
-  EXPECT_LE(t_served, 1.05 * t_run) << "served " << t_served << " s, run " << t_run << " s";
+  // Not starved (one job per line is 5x); room for a loaded machine and the sanitizer build.
+  EXPECT_LE(t_served, 1.15 * t_run) << "served " << t_served << " s, run " << t_run << " s";
   for (std::size_t i = 0; i < 3; ++i) {
     EXPECT_NEAR(sv.c().status().commanded[i], ref.back().position[i], 1e-9);
   }
