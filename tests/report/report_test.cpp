@@ -12,6 +12,7 @@
 #include <fstream>
 #include <string>
 
+#include "io/report_page.hpp"
 #include "simulation/run.hpp"
 
 namespace cncore::io {
@@ -244,6 +245,36 @@ TEST(ReportHtml, MergedPiecesAreNamedByTheirOwnLines) {
                                               default_machine_config(), {path.string(), ""});
   EXPECT_NE(html.find("<td class=\"num\">12</td><td><code>G1 Y1</code></td>"), std::string::npos);
   EXPECT_EQ(html.find("collinear lines run as one"), std::string::npos);
+}
+
+TEST(ReportHtml, Base64OfTheRfcVectors) {
+  EXPECT_EQ(page::base64(""), "");
+  EXPECT_EQ(page::base64("f"), "Zg==");
+  EXPECT_EQ(page::base64("fo"), "Zm8=");
+  EXPECT_EQ(page::base64("foo"), "Zm9v");
+  EXPECT_EQ(page::base64("foob"), "Zm9vYg==");
+  EXPECT_EQ(page::base64("fooba"), "Zm9vYmE=");
+  EXPECT_EQ(page::base64("foobar"), "Zm9vYmFy");
+  EXPECT_EQ(page::base64(std::string("\xff\x00\xfe", 3)), "/wD+");
+}
+
+TEST(ReportHtml, HeightMapIsInlinedWithItsScale) {
+  const MachineConfig m = default_machine_config();
+  const fs::path prog = write_program("hm.ngc", "G21 G90\nG1 X10 F6000\nM2\n");
+  ReportObserver r(m, "lookahead");
+  SummaryObserver summary(m, "lookahead");
+  sim::run_program(prog.string(), m, {}, {&r, &summary});
+  ReportInput input{
+      prog.string(), "", {"foobar", -12.5, 0, {"rgb(20,30,110)", "rgb(240,235,210)"}}};
+  const std::string html = render_report_html(r, summary.summary(), m, input);
+  EXPECT_NE(html.find("src=\"data:image/png;base64,Zm9vYmFy\""), std::string::npos);
+  EXPECT_NE(html.find("linear-gradient(to top,rgb(20,30,110),rgb(240,235,210))"),
+            std::string::npos);
+  EXPECT_NE(html.find("Z 0.000 mm"), std::string::npos);
+  EXPECT_NE(html.find("Z -12.500 mm"), std::string::npos);
+  // Without a map, no section.
+  const std::string plain = render_report_html(r, summary.summary(), m, {prog.string(), "", {}});
+  EXPECT_EQ(plain.find("id=\"heightmap\""), std::string::npos);
 }
 
 TEST(ReportHtml, ProgramTextIsEscaped) {
