@@ -205,7 +205,7 @@ TEST(ReportHtml, OneMillionSamplesGiveABoundedPageFast) {
   const auto t0 = std::chrono::steady_clock::now();
   for (std::uint64_t k = 0; k < 1'000'000; ++k) r.on_sample(line_sample(k, 500'000));
   r.on_finish();
-  const std::string html = render_report_html(r, summary.summary(), m, {prog.string(), ""});
+  const std::string html = render_report_html(r, summary.summary(), m, {prog.string(), "", {}});
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_LT(html.size(), 2'000'000u);
   EXPECT_LT(s, 10.0);  // ~0.3 s optimised; generous for the sanitizer build
@@ -242,7 +242,7 @@ TEST(ReportHtml, MergedPiecesAreNamedByTheirOwnLines) {
   }
   EXPECT_TRUE(corner);
   const std::string html = render_report_html(r->report, r->summary.summary(),
-                                              default_machine_config(), {path.string(), ""});
+                                              default_machine_config(), {path.string(), "", {}});
   EXPECT_NE(html.find("<td class=\"num\">12</td><td><code>G1 Y1</code></td>"), std::string::npos);
   EXPECT_EQ(html.find("collinear lines run as one"), std::string::npos);
 }
@@ -284,7 +284,8 @@ TEST(ReportHtml, ProgramTextIsEscaped) {
   ReportObserver r(m, "lookahead");
   SummaryObserver summary(m, "lookahead");
   sim::run_program(prog.string(), m, {}, {&r, &summary});
-  const std::string html = render_report_html(r, summary.summary(), m, {prog.string(), "T <x>"});
+  const std::string html =
+      render_report_html(r, summary.summary(), m, {prog.string(), "T <x>", {}});
   EXPECT_NE(html.find("<title>T &lt;x&gt;</title>"), std::string::npos);
   EXPECT_NE(html.find("(a &lt;b&gt; &amp; &quot;c&quot; &lt;/script&gt;)"), std::string::npos);
 }
