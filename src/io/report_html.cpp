@@ -260,10 +260,10 @@ std::string page_data(const ReportObserver& report, const MachineConfig& machine
   } else {
     data += ",\"load\":null";
   }
-  data += fmt::format(",\"accel_limit\":{},\"override_max\":{},\"vmax\":{},\"vmax_all\":{}",
+  data += fmt::format(R"(,"accel_limit":{},"override_max":{},"vmax":{},"vmax_all":{})",
                       machine.max_accel_mm_s2, override_max, vmax, vmax_all);
   const auto& p = report.path();
-  data += ",\"path\":{\"x\":" + js_array(p.size(), [&](std::size_t i) { return p[i].x_mm; });
+  data += R"(,"path":{"x":)" + js_array(p.size(), [&](std::size_t i) { return p[i].x_mm; });
   data += ",\"y\":" + js_array(p.size(), [&](std::size_t i) { return p[i].y_mm; });
   data += ",\"z\":" + js_array(p.size(), [&](std::size_t i) { return p[i].z_mm; });
   data += ",\"v\":" + js_array(p.size(), [&](std::size_t i) { return double{p[i].speed_mm_min}; });
@@ -271,12 +271,12 @@ std::string page_data(const ReportObserver& report, const MachineConfig& machine
   data += "},\"losses\":[";
   const ReportLosses& losses = report.losses();
   for (std::size_t c = 0; c < kLossCauses; ++c) {
-    data += fmt::format("{}{{\"name\":\"{}\",\"s\":{:.6g}}}", c ? "," : "",
+    data += fmt::format(R"({}{{"name":"{}","s":{:.6g}}})", c ? "," : "",
                         loss_cause_name(static_cast<LossCause>(c)), losses.cause_s[c]);
   }
   data += "],\"slow\":[";
   for (std::size_t i = 0; i < slow.size(); ++i) {
-    data += fmt::format("{}{{\"x\":{:.6g},\"y\":{:.6g},\"line\":{}}}", i ? "," : "", slow[i].x_mm,
+    data += fmt::format(R"({}{{"x":{:.6g},"y":{:.6g},"line":{}}})", i ? "," : "", slow[i].x_mm,
                         slow[i].y_mm, slow[i].line);
   }
   data += "]};";
@@ -411,6 +411,7 @@ std::string render_report_html(const ReportObserver& report, const Summary& summ
   const std::vector<ReportSlowSpot> rapids = report.slowest_rapids();
   const std::string data = page_data(report, machine, slow);
   std::vector<std::uint32_t> lines;
+  lines.reserve(slow.size() + rapids.size());
   for (const ReportSlowSpot& s : slow) lines.push_back(s.line);
   for (const ReportSlowSpot& s : rapids) lines.push_back(s.line);
   const auto texts = program_lines(input.program, lines);
