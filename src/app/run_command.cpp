@@ -191,14 +191,15 @@ int command_run(const RunArgs& a) {
   std::optional<io::AtomicOutputFile> heightmap_png, heightmap_grid;
   if (!a.heightmap.empty()) heightmap_png.emplace(a.heightmap);
   if (!a.heightmap_grid.empty()) heightmap_grid.emplace(a.heightmap_grid);
+  io::SummaryObserver summary(machine, a.mode);
   std::optional<io::AtomicOutputFile> html;
   std::optional<io::ReportObserver> report;
   if (!a.report.empty()) {
     html.emplace(a.report);
-    report.emplace(machine, a.mode);
+    // The report explains the summary's own time lost (the summary is observed first).
+    report.emplace(machine, a.mode, io::ReportOptions{}, &summary);
   }
 
-  io::SummaryObserver summary(machine, a.mode);
   // Stop mode always runs the moving average (the seed's conventional method).
   summary.set_accdec(options.kernel.mode == motion::Mode::kStop ||
                              options.kernel.accdec == motion::AccDecType::kMovingAverage
@@ -239,14 +240,26 @@ int command_run(const RunArgs& a) {
     if (cutting) text = cut::summary_json_with_cutting(text, *cutting, machine.cutting);
     json->write(text);
   }
-  if (heightmap_png) heightmap_png->write(cut::heightmap_png(cutting->map()));
+  // The height map's PNG, for its file and the report.
+  const std::string map_png =
+      cutting && (heightmap_png || html) ? cut::heightmap_png(cutting->map()) : std::string();
+  if (heightmap_png) heightmap_png->write(map_png);
   if (heightmap_grid) {
     const bool csv_grid = a.heightmap_grid.size() >= 4 &&
                           a.heightmap_grid.compare(a.heightmap_grid.size() - 4, 4, ".csv") == 0;
     heightmap_grid->write(cut::heightmap_grid(cutting->map(), csv_grid));
   }
-  if (html)
-    html->write(io::render_report_html(*report, summary.summary(), machine, {a.program, ""}));
+  if (html) {
+    io::ReportInput input{a.program, "", {}};
+    if (cutting) {
+      input.heightmap = {map_png, cutting->map().bottom_z_mm(), cutting->map().top_z_mm(), {}};
+      for (const double u : {0.0, 0.25, 0.5, 0.75, 1.0}) {
+        const auto c = cut::heightmap_colour(u);
+        input.heightmap.scale.push_back(fmt::format("rgb({},{},{})", c[0], c[1], c[2]));
+      }
+    }
+    html->write(io::render_report_html(*report, summary.summary(), machine, input));
+  }
   if (csv) csv->commit();
   if (json) json->commit();
   if (html) html->commit();

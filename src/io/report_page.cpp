@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <iterator>
 
 namespace cncore::io {
@@ -21,11 +23,18 @@ window.cncore = (function () {
   const status = document.getElementById('cncore-status');
   function fmt(v, d) { return v == null ? '' : v.toFixed(d); }
   const width = () => Math.max(480, Math.min(1100, document.body.clientWidth - 40));
+  // Every chart has a left and a right axis of fixed widths, so the charts of a page share
+  // their time axis pixel for pixel; the cursor moves in all of them at once.
   function chart(id, title, series, data, axes, scales) {
     const el = document.getElementById(id);
+    axes = (axes || [{}]).map((a, i) => (i === 0 ? a : Object.assign({ size: 70 }, a)));
+    if (!axes.some((a, i) => i > 0 && a.side === 1)) {
+      axes.push({ side: 1, scale: (axes[1] && axes[1].scale) || 'y', size: 70, label: '', grid: { show: false },
+        ticks: { show: false }, values: (u, splits) => splits.map(() => '') });
+    }
     const opts = {
       title: title, width: width(), height: 300, series: series, axes: axes, scales: scales,
-      legend: { live: true }, cursor: { drag: { x: true, y: false } },
+      legend: { live: true }, cursor: { drag: { x: true, y: false }, sync: { key: 'cncore-time' } },
     };
     charts.push(new uPlot(opts, data, el));
   }
@@ -84,6 +93,25 @@ void put_number(std::string& o, double v) {
   } else {
     fmt::format_to(std::back_inserter(o), "{:.6g}", v);
   }
+}
+
+std::string base64(std::string_view bytes) {
+  static constexpr std::string_view kDigits =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string o;
+  o.reserve((bytes.size() + 2) / 3 * 4);
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    // Three bytes (zeros past the end) make four 6-bit digits; '=' for the missing ones.
+    const std::size_t n = std::min<std::size_t>(3, bytes.size() - i);
+    std::uint32_t v = 0;
+    for (std::size_t k = 0; k < 3; ++k) {
+      v = (v << 8) | (k < n ? static_cast<unsigned char>(bytes[i + k]) : 0U);
+    }
+    for (std::size_t k = 0; k < 4; ++k) {
+      o += k <= n ? kDigits[(v >> (18 - 6 * k)) & 63U] : '=';
+    }
+  }
+  return o;
 }
 
 std::string basename_of(const std::string& path) {

@@ -29,6 +29,9 @@ std::string js_array(std::size_t n, F&& value) {
 
 std::string basename_of(const std::string& path);
 
+// RFC 4648 base64 (with padding), for images inlined as data: URLs.
+std::string base64(std::string_view bytes);
+
 // "<!DOCTYPE html>…<body>": title, uPlot's and the page's style, and the error hooks (installed
 // first, so that an error anywhere later is recorded in window.cncoreErrors).
 std::string head(const std::string& title, std::string_view style);

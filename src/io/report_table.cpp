@@ -122,6 +122,37 @@ constexpr std::string_view kPageScript = R"JS(
       points: { show: true, size: 9, space: 0, stroke: '#d62728', fill: '#d62728' }, value: (u, v) => v == null ? '' : 'M' },
   ], [T, D.ref, D.m], [{}, { label: D.ref_unit, size: 70 }], { x: { time: false } });
   axisChart('pos-chart', 'Axis positions', 'position', null, 'pos_unit', 3);
+  // The path in the plane of the first two axes: the second across, the first up (Z across
+  // and X up on a lathe), to one scale; the start marked by a circle.
+  const cv = document.getElementById('plane-canvas');
+  if (D.axes.length >= 2) {
+    document.getElementById('plane-section').hidden = false;
+    const V = D.axes[0].position, U = D.axes[1].position;
+    const w = Math.min(window.cncore.width(), 900), h = Math.round(w * 0.6), pad = 34;
+    cv.width = w; cv.height = h;
+    const g = cv.getContext('2d');
+    g.fillStyle = '#fff'; g.fillRect(0, 0, w, h);
+    let u0 = Infinity, u1 = -Infinity, v0 = Infinity, v1 = -Infinity;
+    for (let i = 0; i < U.length; i++) {
+      if (U[i] == null || V[i] == null) continue;
+      u0 = Math.min(u0, U[i]); u1 = Math.max(u1, U[i]); v0 = Math.min(v0, V[i]); v1 = Math.max(v1, V[i]);
+    }
+    const k = Math.min((w - 2 * pad) / Math.max(u1 - u0, 1e-9), (h - 2 * pad) / Math.max(v1 - v0, 1e-9));
+    const ou = pad + (w - 2 * pad - (u1 - u0) * k) / 2, ov = pad + (h - 2 * pad - (v1 - v0) * k) / 2;
+    const X = (u) => ou + (u - u0) * k, Y = (v) => h - ov - (v - v0) * k;
+    g.strokeStyle = '#1f77b4'; g.lineWidth = 1.5; g.beginPath();
+    let first = true;
+    for (let i = 0; i < U.length; i++) {
+      if (U[i] == null || V[i] == null) continue;
+      if (first) { g.moveTo(X(U[i]), Y(V[i])); first = false; } else g.lineTo(X(U[i]), Y(V[i]));
+    }
+    g.stroke();
+    if (U.length > 0) { g.beginPath(); g.arc(X(U[0]), Y(V[0]), 5, 0, 2 * Math.PI); g.stroke(); }
+    g.fillStyle = '#000'; g.font = '12px sans-serif';
+    const a = D.axes;
+    g.fillText(a[1].name + ' ' + u0.toFixed(2) + ' … ' + u1.toFixed(2) + ' ' + a[1].pos_unit + ' (across),  ' +
+      a[0].name + ' ' + v0.toFixed(2) + ' … ' + v1.toFixed(2) + ' ' + a[0].pos_unit + ' (up)', pad, h - 10);
+  }
   // For the browser test (uPlot draws in a later task).
   setTimeout(window.cncore.check, 50);
 })();
@@ -245,6 +276,8 @@ std::string render_table_report_html(const TableReportObserver& report, const Su
   o += "<h2>Axis accelerations</h2>\n<div id=\"accel-chart\"></div>\n";
   o += "<h2>Reference value and M codes</h2>\n<div id=\"ref-chart\"></div>\n";
   o += "<h2>Axis positions</h2>\n<div id=\"pos-chart\"></div>\n";
+  o += "<section id=\"plane-section\" hidden><h2>The path in the plane of the first two axes"
+       "</h2>\n<canvas id=\"plane-canvas\"></canvas></section>\n";
   o += fmt::format(
       "<div class=\"note\">{} samples shown as {} buckets of {}+ cycles each (minimum and "
       "maximum of every bucket drawn). Speeds and accelerations are magnitudes, by finite "

@@ -99,8 +99,8 @@ void SummaryObserver::on_block(const Block& b) {
     case BlockKind::kArc:
       cap = machine_.max_feed_mm_min;
       ++summary_.blocks;
-      pending_.push_back({b.line, std::min(b.feed_mm_min, cap), cap, false, true, false,
-                          b.last_line, ProgrammedMove(b)});
+      pending_.push_back(
+          {b.line, b.feed_mm_min, cap, false, true, false, b.last_line, ProgrammedMove(b)});
       break;
     case BlockKind::kDwell:
       pending_.push_back({b.line, 0, 0, false, false, false, 0, ProgrammedMove{}});
@@ -175,7 +175,8 @@ double SummaryObserver::path_ring_distance(Vec3 pos, double lag_mm) {
 
 // Time lost on block b for dt_s of a cycle that moved len_mm on it, against its programmed
 // feed × override: dt − len/F (the cycle ran at v = len/dt: dt·(1 − v/F)), 0 when v ≥ F.
-void SummaryObserver::credit(Pending& b, double dt_s, double len_mm, double override_pct) {
+void SummaryObserver::credit(Pending& b, double dt_s, double len_mm, const motion::Sample& s) {
+  const double override_pct = s.override_pct;
   if (b.line != group_.line) {
     close_group();
     group_.line = b.line;
@@ -186,25 +187,32 @@ void SummaryObserver::credit(Pending& b, double dt_s, double len_mm, double over
     b.timed = true;
     ++summary_.blocks_timed;
   }
-  // F × override, capped: computed again only when one of the three changes (a division per
+  // F as written × override, capped, as the kernel asks it (F20000 at 50 % on a 10 000 mm/min
+  // machine runs at 10 000): computed again only when one of the three changes (a division per
   // cycle less; the same double).
-  if (b.feed_mm_min != target_feed_ || b.cap_mm_min != target_cap_ ||
+  if (b.programmed_mm_min != target_feed_ || b.cap_mm_min != target_cap_ ||
       override_pct != target_override_) {
-    target_feed_ = b.feed_mm_min;
+    target_feed_ = b.programmed_mm_min;
     target_cap_ = b.cap_mm_min;
     target_override_ = override_pct;
-    target_ = std::min(b.feed_mm_min * override_pct / 100, b.cap_mm_min);
+    target_ = std::min(b.programmed_mm_min * override_pct / 100, b.cap_mm_min);
   }
   const double target = target_;
   group_.programmed_feed_mm_min = target;
   group_.rapid = b.rapid;
   group_.last_line = b.last_line;
+  double lost_s = 0;
   if (target > 0) {
     const double lost = dt_s - len_mm * 60 / target;
     if (lost > 0) {
+      lost_s = lost;
       group_.lost_s += lost;
       summary_.time_lost_s += lost;
     }
+  }
+  if (listener_ != nullptr && b.motion) {
+    listener_->on_share({&s, b.line, b.last_line, b.rapid, dt_s, len_mm, b.programmed_mm_min,
+                         b.cap_mm_min, target, lost_s});
   }
 }
 
@@ -213,7 +221,7 @@ void SummaryObserver::credit(Pending& b, double dt_s, double len_mm, double over
 // the first, the whole of those between, the start of the last), at the cycle's speed.
 void SummaryObserver::share(const motion::Sample& s, std::size_t j, double dt_s, double len_mm) {
   if (j == 0) {
-    credit(pending_.front(), dt_s, len_mm, s.override_pct);
+    credit(pending_.front(), dt_s, len_mm, s);
     return;
   }
   const Vec3 path = s.path_position.xyz();
@@ -227,12 +235,12 @@ void SummaryObserver::share(const motion::Sample& s, std::size_t j, double dt_s,
   double total = 0;
   for (std::size_t k = 0; k <= j; ++k) total += covered(k);
   if (!(total > 0)) {
-    credit(pending_[j], dt_s, len_mm, s.override_pct);
+    credit(pending_[j], dt_s, len_mm, s);
     return;
   }
   for (std::size_t k = 0; k <= j; ++k) {
     const double w = covered(k) / total;
-    if (w > 0) credit(pending_[k], dt_s * w, len_mm * w, s.override_pct);
+    if (w > 0) credit(pending_[k], dt_s * w, len_mm * w, s);
   }
 }
 
@@ -435,7 +443,7 @@ void SummaryObserver::sample(const motion::Sample& s) {
       } else if (!pending_.empty() && pending_.front().motion) {
         // On an event after the block (M2 at the end point, a waiting M code): the cycle that
         // reached it still belongs to the block.
-        credit(pending_.front(), dt, len, s.override_pct);
+        credit(pending_.front(), dt, len, s);
       } else if (s.line != 0) {  // a line not among the blocks: time and length only
         if (s.line != group_.line) {
           close_group();

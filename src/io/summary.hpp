@@ -95,6 +95,27 @@ struct Summary {
   LoadSummary load;
 };
 
+// One block's share of one cycle, as the summary accounts it (see SummaryObserver::share): the
+// HTML report ranks and explains the time lost from these, so both give the same figures.
+struct TimeShare {
+  const motion::Sample* sample = nullptr;  // the sample that closes the cycle
+  std::uint32_t line = 0;
+  std::uint32_t last_line = 0;  // Block::last_line
+  bool rapid = false;
+  double dt_s = 0;               // the block's part of the cycle
+  double length_mm = 0;          // the distance travelled on the block in it
+  double programmed_mm_min = 0;  // F as written (the rapid rate for G0), before the cap
+  double cap_mm_min = 0;         // the machine's limit of the move
+  double target_mm_min = 0;      // min(F × override, cap)
+  double lost_s = 0;             // max(0, dt − length/target); 0 when the target is 0
+};
+
+class TimeShareListener {
+ public:
+  virtual ~TimeShareListener() = default;
+  virtual void on_share(const TimeShare& share) = 0;
+};
+
 class SummaryObserver : public sim::SampleObserver {
  public:
   SummaryObserver(const MachineConfig& machine, std::string mode);
@@ -105,6 +126,8 @@ class SummaryObserver : public sim::SampleObserver {
   // The motion blocks of the program (the kernel may get fewer: collinear pieces merged, or
   // more: arcs split by the direction correction).
   void set_program_blocks(std::uint64_t n) { summary_.blocks = n; }
+  // Receives every share of every cycle given to a motion block (nullptr: none).
+  void set_share_listener(TimeShareListener* listener) { listener_ = listener; }
 
   void on_block(const Block& block) override;
   void on_sample(const motion::Sample& sample) override;
@@ -122,8 +145,8 @@ class SummaryObserver : public sim::SampleObserver {
  private:
   struct Pending {
     std::uint32_t line;
-    double feed_mm_min;  // programmed, clamped to the machine's limit
-    double cap_mm_min;   // the limit itself (max feed, or rapid rate for G0)
+    double programmed_mm_min;  // F as written (the rapid rate for G0)
+    double cap_mm_min;         // the limit itself (max feed, or rapid rate for G0)
     bool rapid;
     bool motion;              // a motion block (else a dwell: no geometry)
     bool timed;               // given a share of some cycle's time already
@@ -138,7 +161,7 @@ class SummaryObserver : public sim::SampleObserver {
   static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
   std::size_t match(std::uint32_t line) const;
   void share(const motion::Sample& s, std::size_t j, double dt_s, double len_mm);
-  void credit(Pending& b, double dt_s, double len_mm, double override_pct);
+  void credit(Pending& b, double dt_s, double len_mm, const motion::Sample& s);
   void pass(std::size_t j, double t_s);
   double programmed_distance(Vec3 pos, std::size_t j, double t_s) const;
   double path_ring_distance(Vec3 pos, double lag_mm);
@@ -184,6 +207,7 @@ class SummaryObserver : public sim::SampleObserver {
   unsigned travel_unwarned_ = 0;
   std::array<double, kMaxAxes> travel_lo_mm_{}, travel_hi_mm_{};
   bool record_sample_events_ = true;
+  TimeShareListener* listener_ = nullptr;
   double load_sum_pct_ = 0;  // Σ load over the cycles with a reading
   std::uint64_t load_cycles_ = 0;
   // The last target feed of the slowest spots and what it was computed from (NaN: none yet).

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <string>
 
+#include "io/report_page.hpp"
 #include "simulation/run.hpp"
 
 namespace cncore::io {
@@ -204,7 +205,7 @@ TEST(ReportHtml, OneMillionSamplesGiveABoundedPageFast) {
   const auto t0 = std::chrono::steady_clock::now();
   for (std::uint64_t k = 0; k < 1'000'000; ++k) r.on_sample(line_sample(k, 500'000));
   r.on_finish();
-  const std::string html = render_report_html(r, summary.summary(), m, {prog.string(), ""});
+  const std::string html = render_report_html(r, summary.summary(), m, {prog.string(), "", {}});
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_LT(html.size(), 2'000'000u);
   EXPECT_LT(s, 10.0);  // ~0.3 s optimised; generous for the sanitizer build
@@ -241,9 +242,39 @@ TEST(ReportHtml, MergedPiecesAreNamedByTheirOwnLines) {
   }
   EXPECT_TRUE(corner);
   const std::string html = render_report_html(r->report, r->summary.summary(),
-                                              default_machine_config(), {path.string(), ""});
+                                              default_machine_config(), {path.string(), "", {}});
   EXPECT_NE(html.find("<td class=\"num\">12</td><td><code>G1 Y1</code></td>"), std::string::npos);
   EXPECT_EQ(html.find("collinear lines run as one"), std::string::npos);
+}
+
+TEST(ReportHtml, Base64OfTheRfcVectors) {
+  EXPECT_EQ(page::base64(""), "");
+  EXPECT_EQ(page::base64("f"), "Zg==");
+  EXPECT_EQ(page::base64("fo"), "Zm8=");
+  EXPECT_EQ(page::base64("foo"), "Zm9v");
+  EXPECT_EQ(page::base64("foob"), "Zm9vYg==");
+  EXPECT_EQ(page::base64("fooba"), "Zm9vYmE=");
+  EXPECT_EQ(page::base64("foobar"), "Zm9vYmFy");
+  EXPECT_EQ(page::base64(std::string("\xff\x00\xfe", 3)), "/wD+");
+}
+
+TEST(ReportHtml, HeightMapIsInlinedWithItsScale) {
+  const MachineConfig m = default_machine_config();
+  const fs::path prog = write_program("hm.ngc", "G21 G90\nG1 X10 F6000\nM2\n");
+  ReportObserver r(m, "lookahead");
+  SummaryObserver summary(m, "lookahead");
+  sim::run_program(prog.string(), m, {}, {&r, &summary});
+  ReportInput input{
+      prog.string(), "", {"foobar", -12.5, 0, {"rgb(20,30,110)", "rgb(240,235,210)"}}};
+  const std::string html = render_report_html(r, summary.summary(), m, input);
+  EXPECT_NE(html.find("src=\"data:image/png;base64,Zm9vYmFy\""), std::string::npos);
+  EXPECT_NE(html.find("linear-gradient(to top,rgb(20,30,110),rgb(240,235,210))"),
+            std::string::npos);
+  EXPECT_NE(html.find("Z 0.000 mm"), std::string::npos);
+  EXPECT_NE(html.find("Z -12.500 mm"), std::string::npos);
+  // Without a map, no section.
+  const std::string plain = render_report_html(r, summary.summary(), m, {prog.string(), "", {}});
+  EXPECT_EQ(plain.find("id=\"heightmap\""), std::string::npos);
 }
 
 TEST(ReportHtml, ProgramTextIsEscaped) {
@@ -253,7 +284,8 @@ TEST(ReportHtml, ProgramTextIsEscaped) {
   ReportObserver r(m, "lookahead");
   SummaryObserver summary(m, "lookahead");
   sim::run_program(prog.string(), m, {}, {&r, &summary});
-  const std::string html = render_report_html(r, summary.summary(), m, {prog.string(), "T <x>"});
+  const std::string html =
+      render_report_html(r, summary.summary(), m, {prog.string(), "T <x>", {}});
   EXPECT_NE(html.find("<title>T &lt;x&gt;</title>"), std::string::npos);
   EXPECT_NE(html.find("(a &lt;b&gt; &amp; &quot;c&quot; &lt;/script&gt;)"), std::string::npos);
 }

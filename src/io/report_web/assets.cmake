@@ -33,5 +33,5 @@ add_custom_command(
           -DNAME=uplot_css -P ${_web_src}/embed.cmake
   DEPENDS ${_uplot_dist}/uPlot.min.css ${_web_src}/embed.cmake
   VERBATIM)
-target_sources(cncore_io PRIVATE report.cpp report_page.cpp report_table.cpp ${_gen}/uplot_js.cpp
+target_sources(cncore_io PRIVATE report.cpp report_html.cpp report_losses.cpp report_page.cpp report_table.cpp ${_gen}/uplot_js.cpp
   ${_gen}/uplot_css.cpp)

@@ -176,6 +176,28 @@ std::string format_cutting_summary(const CuttingSimulator& sim, const CuttingCon
   return o;
 }
 
+namespace {
+
+// The height ramp of the map, u = 0 (stock bottom) … 1 (top): deep = dark blue, middle = teal,
+// top = warm white.
+double ramp_red(double u) {
+  return u < 0.5 ? 20 + u * 2 * 40 : 60 + (u - 0.5) * 2 * 180;
+}
+double ramp_green(double u) {
+  return u < 0.5 ? 30 + u * 2 * 120 : 150 + (u - 0.5) * 2 * 85;
+}
+double ramp_blue(double u) {
+  return u < 0.5 ? 110 + u * 2 * 70 : 180 + (u - 0.5) * 2 * 30;
+}
+
+}  // namespace
+
+std::array<unsigned char, 3> heightmap_colour(double u) {
+  u = std::clamp(u, 0.0, 1.0);
+  return {static_cast<unsigned char>(ramp_red(u)), static_cast<unsigned char>(ramp_green(u)),
+          static_cast<unsigned char>(ramp_blue(u))};
+}
+
 std::string heightmap_png(const HeightMap& map) {
   // At most 4096 pixels a side: larger maps are shown by the lowest cell of each k×k block,
   // so every cut stays visible.
@@ -206,10 +228,7 @@ std::string heightmap_png(const HeightMap& map) {
       const double lambert = std::max(0.0, (-gx * lx - gy * ly + lz) / nlen);
       const double shade = std::clamp(0.35 + 0.65 * lambert / lz, 0.0, 1.15);
       const double u = std::clamp((at(i, j) - lo) / span, 0.0, 1.0);
-      // Ramp: deep = dark blue, middle = teal, top = warm white.
-      const double r = u < 0.5 ? 20 + u * 2 * 40 : 60 + (u - 0.5) * 2 * 180;
-      const double g = u < 0.5 ? 30 + u * 2 * 120 : 150 + (u - 0.5) * 2 * 85;
-      const double b = u < 0.5 ? 110 + u * 2 * 70 : 180 + (u - 0.5) * 2 * 30;
+      const double r = ramp_red(u), g = ramp_green(u), b = ramp_blue(u);
       unsigned char* px = &rgb[(row * w + i) * 3];
       px[0] = static_cast<unsigned char>(std::clamp(r * shade, 0.0, 255.0));
       px[1] = static_cast<unsigned char>(std::clamp(g * shade, 0.0, 255.0));

@@ -4,6 +4,7 @@
 // feed control (spec 04).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -117,6 +118,9 @@ std::string format_cutting_summary(const CuttingSimulator& sim, const CuttingCon
 // for any other extension, binary: "CNCZMAP1", uint32 nx, ny, float64 x0, y0, cell (mm),
 // then nx·ny float32 heights row by row (little-endian).
 std::string heightmap_png(const HeightMap& map);
+// The PNG's colour (unshaded, 0–255 each) at the fraction u of the height from the stock bottom
+// (0) to the top (1): the scale a page draws beside it.
+std::array<unsigned char, 3> heightmap_colour(double u);
 std::string heightmap_grid(const HeightMap& map, bool csv);
 
 }  // namespace cncore::cut
