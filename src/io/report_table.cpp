@@ -171,6 +171,8 @@ code { background: #f4f4f4; padding: 0 3px; }
 
 }  // namespace
 
+// Size: the table report's page in the order it reads: header, figures, the axes' plots and the
+// path, the events; each part is a few lines of page text around data built above.
 std::string render_table_report_html(const TableReportObserver& report, const Summary& summary,
                                      const MachineConfig& machine, const TableReportInput& input) {
   std::string names;

@@ -344,6 +344,9 @@ void SummaryObserver::on_samples(std::span<const motion::Sample> samples) {
   }
 }
 
+// Size: the per-sample hot path of every run: the figures of one cycle (time, load, block under
+// the tool, contour error, speeds and accelerations by differences) in one pass over the axes,
+// kept together so the compiler unrolls and overlaps them (see on_samples).
 template <std::size_t N>
 void SummaryObserver::sample(const motion::Sample& s) {
   ++summary_.cycles;
