@@ -1,5 +1,6 @@
 // `cncore serve`: the controller process (src/runtime) with its text console on standard input
-// and, when asked, the Grbl 1.1 endpoints (src/grbl) for senders.
+// and, when asked, the Grbl 1.1 endpoints (src/grbl) for senders, the operator's web page
+// (src/hmi) and MTConnect telemetry (src/telemetry).
 #include <poll.h>
 #include <unistd.h>
 
@@ -19,6 +20,7 @@
 #include "app/commands.hpp"
 #include "app/serve_console.hpp"
 #include "grbl/endpoint.hpp"
+#include "hmi/hmi.hpp"
 #include "io/trajectory_csv.hpp"
 #include "runtime/control.hpp"
 #include "runtime/persist.hpp"
@@ -120,19 +122,37 @@ void load_grbl_settings(grbl::SettingsStore& store, MachineConfig& machine,
   store.settings.apply(machine);
 }
 
-void print_messages(runtime::Controller& c) {
-  while (auto m = c.take_message()) std::cout << "msg: " << *m << "\n";
+// The controller's messages go to the console and to the web page.
+void print_messages(runtime::Controller& c, hmi::HttpServer* web) {
+  while (auto m = c.take_message()) {
+    std::cout << "msg: " << *m << "\n";
+    if (web != nullptr) web->post_message(*m);
+  }
   std::cout.flush();
+}
+
+// --http-token, or the first line of --http-token-file (surrounding blanks dropped).
+std::string http_token(const ServeArgs& a) {
+  if (a.http_token_file.empty()) return a.http_token;
+  require_readable(a.http_token_file);
+  std::ifstream f(a.http_token_file);
+  std::string line;
+  std::getline(f, line);
+  const auto first = line.find_first_not_of(" \t\r");
+  const auto last = line.find_last_not_of(" \t\r");
+  if (first == std::string::npos) {
+    throw UsageError("--http-token-file " + a.http_token_file + ": the file holds no token");
+  }
+  return line.substr(first, last - first + 1);
 }
 
 }  // namespace
 
 int command_serve(const ServeArgs& a) {
-  if (!a.http.empty()) {
-    throw UsageError(
-        "--http: this front end is not part of cncore yet; drive the controller "
-        "from standard input or a Grbl sender (docs/runtime.md)");
+  if (a.http.empty() && (!a.http_token.empty() || !a.http_token_file.empty())) {
+    throw UsageError("--http-token and --http-token-file go with --http");
   }
+  const std::string token = a.http.empty() ? "" : http_token(a);
   MachineConfig machine = machine_from(a.machine);
   const runtime::ControllerOptions options = controller_options(a);
   if (!a.program.empty()) require_readable(a.program);
@@ -167,18 +187,32 @@ int command_serve(const ServeArgs& a) {
   } catch (const std::runtime_error& e) {
     throw UsageError(e.what());
   }
+  std::unique_ptr<hmi::HttpServer> web;
+  if (!a.http.empty()) {
+    try {
+      hmi::HttpOptions o;
+      o.address = a.http;
+      o.token = token;
+      web = std::make_unique<hmi::HttpServer>(controller, o);
+    } catch (const std::runtime_error& e) {
+      throw UsageError(e.what());
+    }
+  }
   std::cout << "cncore serve: " << machine.name << ", period " << machine.period_s * 1000
             << " ms, servo " << a.servo << "; commands on stdin\n";
   for (const auto& e : endpoints) std::cout << e->description() << "\n";
+  if (web)
+    std::cout << "web page on " << web->url() << (token.empty() ? "" : " (token set)") << "\n";
   if (!a.program.empty()) {
     const runtime::Result r = controller.load_program(a.program);
     if (!r.ok) throw UsageError("--program: " + r.error);
+    if (web) web->program_loaded(a.program);
     if (a.start) {
       const runtime::Result s = controller.cycle_start();
       if (!s.ok) throw UsageError("--start: " + s.error);
     }
   }
-  print_messages(controller);
+  print_messages(controller, web.get());
   bool stdin_open = true;
   bool quit = false;
   std::string pending;
@@ -202,9 +236,10 @@ int command_serve(const ServeArgs& a) {
         std::cout.flush();
       }
     }
-    print_messages(controller);
+    print_messages(controller, web.get());
   }
   endpoints.clear();  // no sender acts during the stop
+  web.reset();
   if (recorder) {
     // The controlled stop happens in the controller's destructor; record it too.
     controller.reset();
