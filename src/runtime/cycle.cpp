@@ -268,6 +268,7 @@ void CycleLoop::program_cycle(motion::Sample& s) {
     retire_job();
     status_.resetting = false;
     status_.hold_complete = false;
+    status_.spindle_on = false;  // a reset ends the program and stops the spindle
     status_.state = MachineState::kIdle;
   }
 }
@@ -385,6 +386,7 @@ void CycleLoop::raise_alarm(AlarmCode alarm, std::uint32_t line) {
   status_.state = MachineState::kAlarm;
   status_.alarm = alarm;
   status_.alarm_line = line;
+  status_.spindle_on = false;  // an alarm stops the spindle with the axes
 }
 
 void CycleLoop::finish_outputs(std::uint64_t n, motion::Sample& s) {
