@@ -232,6 +232,13 @@ int command_serve(const ServeArgs& a) {
         const std::string line = pending.substr(0, nl);
         pending.erase(0, nl + 1);
         const std::string answer = console_command(controller, line, quit);
+        // A program loaded from the console: the web page draws it too.
+        if (web && answer == "ok" && line.starts_with("load ")) {
+          std::istringstream words(line.substr(5));
+          std::string path;
+          words >> path;
+          web->program_loaded(path);
+        }
         if (!answer.empty()) std::cout << answer << "\n";
         std::cout.flush();
       }

@@ -127,7 +127,12 @@ std::string machine_json(const MachineConfig& machine) {
                     {"min_mm", machine.axes[a].min_mm},
                     {"max_mm", machine.axes[a].max_mm}});
   }
+  json stock = nullptr;
+  if (machine.cutting.stock.enabled) {
+    stock = {{"min_mm", machine.cutting.stock.min_mm}, {"size_mm", machine.cutting.stock.size_mm}};
+  }
   json j{{"name", machine.name},
+         {"stock", stock},
          {"axes", axes},
          {"max_feed_mm_min", machine.max_feed_mm_min},
          {"rapid_mm_min", machine.rapid_mm_min},

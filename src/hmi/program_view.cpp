@@ -28,7 +28,7 @@ std::vector<Vec3> arc_points(const Vec3& start, const Vec3& end, const Vec3& cen
   if (theta <= 1e-9) theta += 2 * std::numbers::pi;
   theta += 2 * std::numbers::pi * turns;
   const auto n = static_cast<std::size_t>(
-      std::clamp(std::ceil(theta / std::max(max_angle_rad, 1e-3)), 1.0, 4096.0));
+      std::clamp(std::ceil(theta / std::max(max_angle_rad, 1e-3) - 1e-9), 1.0, 4096.0));
   const Vec3 w = cross(normal, u);
   std::vector<Vec3> out;
   out.reserve(n);

@@ -4,6 +4,7 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
 const TRAIL_POINTS = 20000;  // fixed buffer: the page's memory does not grow with the run
+const RENDER_FPS = 15;
 
 // Blue → cyan → green → yellow → red for f in 0…1 (the legend's gradient).
 export function speedColor(f, out) {
@@ -37,14 +38,18 @@ export class View3D {
     new ResizeObserver(() => this.resize()).observe(container);
     this.resize();
     this.dirty = true;
-    const loop = () => {
-      if (this.dirty) {
+    // At most RENDER_FPS frames a second, and only when something changed: a path of 100 000
+    // segments drawn in software GL must not take the time the status events need.
+    let last = 0;
+    const loop = (now) => {
+      if (this.dirty && now - last >= 1000 / RENDER_FPS) {
         this.renderer.render(this.scene, this.camera);
         this.dirty = false;
+        last = now;
       }
       requestAnimationFrame(loop);
     };
-    loop();
+    requestAnimationFrame(loop);
   }
 
   resize() {
@@ -89,6 +94,14 @@ export class View3D {
     if (this.boxHelper) this.scene.remove(this.boxHelper);
     this.boxHelper = new THREE.Box3Helper(this.box, 0x4a5260);
     this.scene.add(this.boxHelper);
+    if (machine.stock) {  // [stock]: the raw part, translucent
+      const [sx, sy, sz] = machine.stock.size_mm, [mx, my, mz] = machine.stock.min_mm;
+      const g = new THREE.BoxGeometry(sx, sy, sz);
+      g.translate(mx + sx / 2, my + sy / 2, mz + sz / 2);
+      this.stock = new THREE.Mesh(g, new THREE.MeshBasicMaterial(
+          { color: 0x8d9bb0, transparent: true, opacity: 0.18, depthWrite: false }));
+      this.scene.add(this.stock);
+    }
     this.setView('iso');
   }
 
