@@ -18,7 +18,9 @@ std::string_view uplot_css();
 }  // namespace assets
 
 const WebAsset* find_web_asset(std::string_view path) {
-  constexpr std::string_view kJs = "text/javascript; charset=utf-8";
+  // Not text/javascript: cpp-httplib would compress it with Brotli at its highest quality on
+  // every request (seconds for three.js).
+  constexpr std::string_view kJs = "application/javascript; charset=utf-8";
   constexpr std::string_view kCss = "text/css; charset=utf-8";
   static const std::array<WebAsset, 10> kAssets{{
       {"/", "text/html; charset=utf-8", assets::index_html()},

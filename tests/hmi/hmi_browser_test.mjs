@@ -145,7 +145,10 @@ async function walkThrough(browser) {
   step(`3D view: ${blank.view} lit pixels before the program, ${drawn.view} after`);
   assert.ok(drawn.view > blank.view + 500, 'the program path is drawn');
 
-  // Cycle start: Run, the DRO moves, the program text follows the line.
+  // Feed override 25 % before the start (the program then runs ~4 times its 9.3 s, time for the
+  // steps below on a busy machine); cycle start: Run, the DRO moves, the text follows the line.
+  await page.locator('#feed-override').fill('25');
+  await waitFor(page, 'override 25', (s) => s.feed_override_pct === 25, 5000);
   const x0 = await shown(page, '#dro-x-work');
   await page.click('#btn-start');
   await stateIs(page, 'Run', 5000);
@@ -174,7 +177,7 @@ async function walkThrough(browser) {
   const running = await canvasPixels(page);
   assert.ok(running.plots.every((n) => n > 500), `every plot is drawn: ${running.plots}`);
   await screenshot(page, 'hmi-run.png');
-  await stateIs(page, 'Idle', 60000);
+  await stateIs(page, 'Idle', 120000);
   step('program ended: Idle');
   await screenshot(page, 'hmi-idle.png');
 
@@ -209,36 +212,43 @@ async function walkThrough(browser) {
   await page.close();
   await stopServe(serve);
 
-  // The served trajectory: the override column steps 100 → 50, and every cycle at 50 % runs at
-  // most half the programmed feed of its line (feed moves; rapids follow the feed override too)
-  // once the tool has braked to it (0.3 s after the step: 3000 mm/min brakes in 25 ms at
-  // 2000 mm/s²).
+  // The served trajectory: the override column steps 25 → 50, and every cycle runs at most the
+  // override's share of the programmed feed of its line (feed moves; rapids follow the feed
+  // override too) once the tool has had time to reach it (0.3 s after a change: 3000 mm/min
+  // brakes in 25 ms at 2000 mm/s²).
   const rows = fs.readFileSync(traj, 'utf8').trim().split('\n');
   const head = rows[0].split(',');
   const col = (n) => head.indexOf(n);
   assert.ok(col('override') > 0, `override column in ${rows[0]}`);
   const lineFeed = new Map();
   for (let i = 1; i < program.vertices; ++i) lineFeed.set(program.line[i], program.kind[i] === 1 ? program.feed[i] : 15000);
-  let at50 = 0, first50 = -1;
+  let at50 = 0, first50 = -1, checked = 0, lastOvr = NaN, changedAt = 0;
   for (let r = 1; r < rows.length; ++r) {
-    const v = rows[r].split(',');
-    const ovr = Number(v[col('override')]);
-    if (ovr !== 50) continue;
-    if (first50 < 0) first50 = r;
-    ++at50;
-    if (Number(v[col('t')]) < Number(rows[first50].split(',')[col('t')]) + 0.3) continue;
-    const f = lineFeed.get(Number(v[col('line')]));
-    if (f !== undefined) assert.ok(Number(v[col('feed')]) <= 0.5 * f + 1e-6, `row ${r}: ${rows[r]}`);
+    const v = rows[r].split(',').map(Number);
+    const ovr = v[col('override')], t = v[col('t')];
+    if (ovr !== lastOvr) {
+      if (ovr === 50 && lastOvr === 25 && first50 < 0) first50 = r;
+      lastOvr = ovr;
+      changedAt = t;
+    }
+    if (ovr === 50) ++at50;
+    const f = lineFeed.get(v[col('line')]);
+    if (f === undefined || t < changedAt + 0.3) continue;
+    ++checked;
+    assert.ok(v[col('feed')] <= ovr / 100 * f + 1e-6, `row ${r}: ${rows[r]}`);
   }
-  assert.ok(first50 > 1 && Number(rows[first50 - 1].split(',')[col('override')]) === 100, 'the column steps 100 → 50');
-  step(`trajectory: ${rows.length - 1} cycles, ${at50} at override 50 %, none above half the programmed feed after braking`);
+  assert.ok(first50 > 0, 'the override column steps 25 → 50');
+  assert.ok(at50 > 1000 && checked > 5000, `${at50} cycles at 50 %, ${checked} checked`);
+  step(`trajectory: ${rows.length - 1} cycles, ${at50} at override 50 %; ${checked} cycles of ` +
+       'the program checked, none faster than the override allows');
 }
 
 // ---- endurance: a fine-segment program with the page open ----
 function fineProgram(file, seconds) {
   // A square spiral of 0.1 mm chords at F600 (10 mm/s: 100 blocks/s), long enough for `seconds`.
   const lines = ['G21 G90 G64 P0.01', 'G0 X0 Y0 Z1', 'G1 Z0 F600'];
-  const chords = Math.ceil(seconds * 100 * 1.1);
+  // The warm-up and a margin too: a busy machine can take a minute to open the page.
+  const chords = Math.ceil((seconds + 60) * 100 * 1.2);
   let x = 0, y = 0, dir = 0, leg = 1, left = 10;
   for (let i = 0; i < chords; ++i) {
     const d = [[1, 0], [0, 1], [-1, 0], [0, -1]][dir];
@@ -263,9 +273,10 @@ async function endurance(browser, seconds) {
     const m = (await cdp.send('Performance.getMetrics')).metrics;
     return m.find((x) => x.name === 'JSHeapUsedSize').value / 1048576;
   };
-  await page.waitForFunction(() => window.hmiStats.programLoads >= 1);
+  await page.waitForFunction(() => window.hmiStats.programLoads >= 1, null, { timeout: 120000 })
+      .catch((e) => { throw new Error(`${e.message}; page errors: ${errors}`); });
   await page.click('#btn-start');
-  await stateIs(page, 'Run', 10000);
+  await stateIs(page, 'Run', 30000);
   const warm = Math.min(10, seconds / 4);
   await sleep(warm * 1000);
   const e0 = await page.evaluate(() => { window.hmiStats.maxLagMs = 0; return window.hmiStats.events; });

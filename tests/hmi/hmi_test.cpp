@@ -58,7 +58,7 @@ TEST(ArcPoints, FullCircleAndExtraTurnsOfAHelixRiseLinearly) {
 }
 
 fs::path write_program(const std::string& name, const std::string& text) {
-  const fs::path p = fs::path(CNCORE_TEST_TMP_DIR) / name;
+  fs::path p = fs::path(CNCORE_TEST_TMP_DIR) / name;
   std::ofstream(p) << text;
   return p;
 }

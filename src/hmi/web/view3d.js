@@ -105,7 +105,7 @@ export class View3D {
     this.setView('iso');
   }
 
-  // vertices as /api/program gives them; colourBy: 'programmed' or a Float32Array per vertex.
+  // The program as /api/program gives it; returns [lo, hi], the feed range of the colour scale.
   setPath(program) {
     this.program = program;
     for (const c of [...this.pathGroup.children]) {
@@ -122,30 +122,41 @@ export class View3D {
     if (!(hi >= lo)) { lo = 0; hi = 1; }
     if (hi - lo < 1) hi = lo + 1;
     this.feedRange = [lo, hi];
-    const cut = [], cutCol = [], rapid = [];
+    // Typed arrays sized first: a path of 400 000 vertices builds without growing JS arrays.
+    let nCut = 0, nRapid = 0;
+    for (let i = 1; i < n; ++i) {
+      if (kind[i] === 1) ++nCut; else if (kind[i] === 0) ++nRapid;
+    }
+    const cut = new Float32Array(nCut * 6), cutCol = new Float32Array(nCut * 6);
+    const rapid = new Float32Array(nRapid * 6);
     const c = [0, 0, 0];
+    let ic = 0, ir = 0;
     for (let i = 1; i < n; ++i) {
       if (kind[i] === 2) continue;
-      const a = 3 * (i - 1), b = 3 * i;
-      const seg = [xyz[a], xyz[a + 1], xyz[a + 2], xyz[b], xyz[b + 1], xyz[b + 2]];
+      const a = 3 * (i - 1);
+      const dst = kind[i] === 0 ? rapid : cut;
+      const k = kind[i] === 0 ? ir : ic;
+      for (let j = 0; j < 6; ++j) dst[k + j] = xyz[a + j];
       if (kind[i] === 0) {
-        rapid.push(...seg);
+        ir += 6;
       } else {
-        cut.push(...seg);
         speedColor((feed[i] - lo) / (hi - lo), c);
-        cutCol.push(...c, ...c);
+        cutCol.set(c, ic);
+        cutCol.set(c, ic + 3);
+        ic += 6;
       }
     }
+    this.cuts = null;
     if (cut.length) {
       const g = new THREE.BufferGeometry();
-      g.setAttribute('position', new THREE.Float32BufferAttribute(cut, 3));
-      g.setAttribute('color', new THREE.Float32BufferAttribute(cutCol, 3));
+      g.setAttribute('position', new THREE.BufferAttribute(cut, 3));
+      g.setAttribute('color', new THREE.BufferAttribute(cutCol, 3));
       this.cuts = new THREE.LineSegments(g, new THREE.LineBasicMaterial({ vertexColors: true }));
       this.pathGroup.add(this.cuts);
     }
     if (rapid.length) {
       const g = new THREE.BufferGeometry();
-      g.setAttribute('position', new THREE.Float32BufferAttribute(rapid, 3));
+      g.setAttribute('position', new THREE.BufferAttribute(rapid, 3));
       const l = new THREE.LineSegments(g, new THREE.LineDashedMaterial(
           { color: 0x9aa3ad, dashSize: 2, gapSize: 2 }));
       l.computeLineDistances();
