@@ -146,6 +146,57 @@ std::string http_token(const ServeArgs& a) {
   return line.substr(first, last - first + 1);
 }
 
+// The console on standard input until `quit`, SIGINT or SIGTERM (at the end of standard input it
+// runs on as a daemon).
+void run_console(runtime::Controller& controller, hmi::HttpServer* web) {
+  bool stdin_open = true;
+  bool quit = false;
+  std::string pending;
+  while (!g_stop.load() && !quit) {
+    pollfd p{STDIN_FILENO, POLLIN, 0};
+    const int rc = stdin_open ? ::poll(&p, 1, 100) : (::usleep(100000), 0);
+    if (rc > 0) {
+      char buf[4096];
+      const ssize_t n = ::read(STDIN_FILENO, buf, sizeof buf);
+      if (n <= 0) {
+        stdin_open = false;  // a daemon: runs on until SIGINT / SIGTERM
+      } else {
+        pending.append(buf, static_cast<std::size_t>(n));
+      }
+      for (auto nl = pending.find('\n'); nl != std::string::npos && !quit;
+           nl = pending.find('\n')) {
+        const std::string line = pending.substr(0, nl);
+        pending.erase(0, nl + 1);
+        const std::string answer = console_command(controller, line, quit);
+        // A program loaded from the console: the web page draws it too.
+        if (web != nullptr && answer == "ok" && line.starts_with("load ")) {
+          std::istringstream words(line.substr(5));
+          std::string path;
+          words >> path;
+          web->program_loaded(path);
+        }
+        if (!answer.empty()) std::cout << answer << "\n";
+        std::cout.flush();
+      }
+    }
+    print_messages(controller, web);
+  }
+}
+
+// --http: the web page, or a usage error (address, token rule, bind).
+std::unique_ptr<hmi::HttpServer> start_web(runtime::Controller& controller, const ServeArgs& a,
+                                           const std::string& token) {
+  if (a.http.empty()) return nullptr;
+  try {
+    hmi::HttpOptions o;
+    o.address = a.http;
+    o.token = token;
+    return std::make_unique<hmi::HttpServer>(controller, o);
+  } catch (const std::runtime_error& e) {
+    throw UsageError(e.what());
+  }
+}
+
 }  // namespace
 
 int command_serve(const ServeArgs& a) {
@@ -187,22 +238,13 @@ int command_serve(const ServeArgs& a) {
   } catch (const std::runtime_error& e) {
     throw UsageError(e.what());
   }
-  std::unique_ptr<hmi::HttpServer> web;
-  if (!a.http.empty()) {
-    try {
-      hmi::HttpOptions o;
-      o.address = a.http;
-      o.token = token;
-      web = std::make_unique<hmi::HttpServer>(controller, o);
-    } catch (const std::runtime_error& e) {
-      throw UsageError(e.what());
-    }
-  }
+  std::unique_ptr<hmi::HttpServer> web = start_web(controller, a, token);
   std::cout << "cncore serve: " << machine.name << ", period " << machine.period_s * 1000
             << " ms, servo " << a.servo << "; commands on stdin\n";
   for (const auto& e : endpoints) std::cout << e->description() << "\n";
-  if (web)
+  if (web) {
     std::cout << "web page on " << web->url() << (token.empty() ? "" : " (token set)") << "\n";
+  }
   if (!a.program.empty()) {
     const runtime::Result r = controller.load_program(a.program);
     if (!r.ok) throw UsageError("--program: " + r.error);
@@ -213,38 +255,7 @@ int command_serve(const ServeArgs& a) {
     }
   }
   print_messages(controller, web.get());
-  bool stdin_open = true;
-  bool quit = false;
-  std::string pending;
-  while (!g_stop.load() && !quit) {
-    pollfd p{STDIN_FILENO, POLLIN, 0};
-    const int rc = stdin_open ? ::poll(&p, 1, 100) : (::usleep(100000), 0);
-    if (rc > 0) {
-      char buf[4096];
-      const ssize_t n = ::read(STDIN_FILENO, buf, sizeof buf);
-      if (n <= 0) {
-        stdin_open = false;  // a daemon: runs on until SIGINT / SIGTERM
-      } else {
-        pending.append(buf, static_cast<std::size_t>(n));
-      }
-      for (auto nl = pending.find('\n'); nl != std::string::npos && !quit;
-           nl = pending.find('\n')) {
-        const std::string line = pending.substr(0, nl);
-        pending.erase(0, nl + 1);
-        const std::string answer = console_command(controller, line, quit);
-        // A program loaded from the console: the web page draws it too.
-        if (web && answer == "ok" && line.starts_with("load ")) {
-          std::istringstream words(line.substr(5));
-          std::string path;
-          words >> path;
-          web->program_loaded(path);
-        }
-        if (!answer.empty()) std::cout << answer << "\n";
-        std::cout.flush();
-      }
-    }
-    print_messages(controller, web.get());
-  }
+  run_console(controller, web.get());
   endpoints.clear();  // no sender acts during the stop
   web.reset();
   if (recorder) {

@@ -119,12 +119,12 @@ struct HttpServer::Impl {
   std::optional<Reply> refuse_post(const httplib::Request& req) const {
     if (!authorized(req)) {
       return Reply{403,
-                   R"j({"ok":false,"error":"this control needs the token (read-only viewer)"})j"};
+                   "{\"ok\":false,\"error\":\"this control needs the token (read-only viewer)\"}"};
     }
     const std::string origin = req.get_header_value("Origin");
     const std::string host_header = req.get_header_value("Host");
     if (!origin.empty() && origin != "http://" + host_header) {
-      return Reply{403, R"({"ok":false,"error":"a control from another site's page"})"};
+      return Reply{403, R"({"ok":false,"error":"a control from a page of another site"})"};
     }
     return std::nullopt;
   }

@@ -114,6 +114,10 @@ async function screenshot(page, name) {
 
 async function openPage(browser, url) {
   const page = await browser.newPage({ viewport: { width: 1400, height: 860 } });
+  // Generous: on a 2-core machine shared with builds, Chromium alone can take half a minute to
+  // load the page (measured the same with a plain static file server).
+  page.setDefaultTimeout(120000);
+  page.setDefaultNavigationTimeout(120000);
   const errors = [];
   page.on('pageerror', (e) => errors.push(e.message));
   // (A refused control is answered 409, which the console reports as a failed resource.)
@@ -121,7 +125,7 @@ async function openPage(browser, url) {
     if (m.type() === 'error' && !/status of 409/.test(m.text())) errors.push(m.text());
   });
   await page.goto(url);
-  await stateIs(page, 'Idle', 15000);
+  await stateIs(page, 'Idle', 120000);
   return { page, errors };
 }
 
