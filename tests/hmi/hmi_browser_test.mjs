@@ -49,10 +49,14 @@ fs.mkdirSync(out, { recursive: true });
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 const step = (text) => console.log(`[${new Date().toISOString().slice(11, 19)}] ${text}`);
 
-// ---- cncore serve, on a free port ----
+// ---- cncore serve, on a free port (ended with the test, also when an assertion fails) ----
+const served = new Set();
+process.on('exit', () => { for (const p of served) p.kill('SIGKILL'); });
 function startServe(extra) {
   const proc = spawn(cncore, ['serve', '--no-state', '--no-realtime', '--http', '127.0.0.1:0', ...extra],
                      { stdio: ['pipe', 'pipe', 'pipe'] });
+  served.add(proc);
+  proc.on('exit', () => served.delete(proc));
   let log = '';
   proc.stdout.on('data', (d) => { log += d; });
   proc.stderr.on('data', (d) => { log += d; });
@@ -251,8 +255,8 @@ async function walkThrough(browser) {
 function fineProgram(file, seconds) {
   // A square spiral of 0.1 mm chords at F600 (10 mm/s: 100 blocks/s), long enough for `seconds`.
   const lines = ['G21 G90 G64 P0.01', 'G0 X0 Y0 Z1', 'G1 Z0 F600'];
-  // The warm-up and a margin too: a busy machine can take a minute to open the page.
-  const chords = Math.ceil((seconds + 60) * 100 * 1.2);
+  // The warm-up and a margin too: a busy machine can take minutes to open the page.
+  const chords = Math.ceil((seconds * 1.5 + 120) * 100);
   let x = 0, y = 0, dir = 0, leg = 1, left = 10;
   for (let i = 0; i < chords; ++i) {
     const d = [[1, 0], [0, 1], [-1, 0], [0, -1]][dir];
