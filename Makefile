@@ -10,7 +10,8 @@ CNCORE := $(BUILD)/src/app/cncore
 DEB_PACKAGES := cmake ninja-build g++ make pkg-config python3 \
   libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev libfast-float-dev \
   libmuparser-dev libgtest-dev libgmock-dev libbenchmark-dev librapidcheck-dev libpng-dev time \
-  chromium dpkg-dev libpaho-mqtt-dev libpaho-mqttpp-dev mosquitto mosquitto-clients openssl
+  chromium dpkg-dev libpaho-mqtt-dev libpaho-mqttpp-dev mosquitto mosquitto-clients openssl \
+  libcpp-httplib-dev
 # Node.js and npm (uPlot for the HTML report) come from Debian only when no `npm` is on the PATH:
 # a machine with Node.js from elsewhere has its own npm, which Debian's package conflicts with.
 NODE_PACKAGES := nodejs npm

@@ -54,9 +54,10 @@ int command_table(const TableArgs& a);
 
 struct ServeArgs {
   std::string machine, servo = "sim", state_dir, program, trajectory;
-  std::string grbl_tcp, grbl_pty, http;  // front ends that plug into the control interface
-  std::string mtconnect;                 // --mtconnect HOST:PORT: MTConnect SHDR adapter
-  std::string mqtt;                      // --mqtt mqtt://HOST:PORT/PREFIX: MQTT publisher
+  std::string grbl_tcp, grbl_pty, http;     // front ends that plug into the control interface
+  std::string http_token, http_token_file;  // --http: the token controls must carry
+  std::string mtconnect;                    // --mtconnect HOST:PORT: MTConnect SHDR adapter
+  std::string mqtt;                         // --mqtt mqtt://HOST:PORT/PREFIX: MQTT publisher
   std::string mqtt_user, mqtt_password_file, mqtt_ca;
   double mqtt_rate_hz = 10;  // --mqtt-rate: samples per second
   bool start = false, no_state = false, no_realtime = false;

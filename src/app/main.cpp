@@ -258,7 +258,16 @@ int main_cli(int argc, char** argv) {
   serve->add_option("--grbl-tcp", sa.grbl_tcp, "Grbl 1.1 protocol over TCP")->type_name("ADDR");
   serve->add_option("--grbl-pty", sa.grbl_pty, "Grbl 1.1 protocol on a pseudo-terminal")
       ->type_name("PATH");
-  serve->add_option("--http", sa.http, "Operator web page")->type_name("ADDR");
+  serve
+      ->add_option("--http", sa.http, "Operator web page (loopback; another address needs a token)")
+      ->type_name("HOST:PORT");
+  auto* token_opt = serve
+                        ->add_option("--http-token", sa.http_token,
+                                     "Token every control of the web page must carry")
+                        ->type_name("TOKEN");
+  serve->add_option("--http-token-file", sa.http_token_file, "Read the web page's token from FILE")
+      ->type_name("FILE")
+      ->excludes(token_opt);
   serve->add_option("--mtconnect", sa.mtconnect, "MTConnect SHDR adapter (read-only telemetry)")
       ->type_name("HOST:PORT");
   serve

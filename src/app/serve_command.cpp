@@ -1,6 +1,6 @@
 // `cncore serve`: the controller process (src/runtime) with its text console on standard input
-// and, when asked, the Grbl 1.1 endpoints (src/grbl) for senders and the telemetry publishers
-// (src/telemetry: MTConnect SHDR, MQTT).
+// and, when asked, the Grbl 1.1 endpoints (src/grbl) for senders, the operator's web page
+// (src/hmi) and the telemetry publishers (src/telemetry: MTConnect SHDR, MQTT).
 #include <poll.h>
 #include <unistd.h>
 
@@ -20,6 +20,7 @@
 #include "app/commands.hpp"
 #include "app/serve_console.hpp"
 #include "grbl/endpoint.hpp"
+#include "hmi/hmi.hpp"
 #include "io/trajectory_csv.hpp"
 #include "runtime/control.hpp"
 #include "runtime/persist.hpp"
@@ -148,22 +149,100 @@ std::unique_ptr<telemetry::MqttPublisher> start_mqtt(const runtime::Controller& 
   }
 }
 
-void print_messages(runtime::Controller& c, telemetry::MqttPublisher* mqtt) {
-  while (auto m = c.take_message()) std::cout << "msg: " << *m << "\n";
-  while (auto m = mqtt != nullptr ? mqtt->take_message() : std::nullopt) {
+// The front ends that show the controller's messages besides the console.
+struct FrontEnds {
+  hmi::HttpServer* web = nullptr;
+  telemetry::MqttPublisher* mqtt = nullptr;
+  telemetry::ShdrAdapter* shdr = nullptr;
+};
+
+// The controller's messages (and the MQTT publisher's) go to the console and to the web page.
+void print_messages(runtime::Controller& c, const FrontEnds& f) {
+  while (auto m = c.take_message()) {
+    std::cout << "msg: " << *m << "\n";
+    if (f.web != nullptr) f.web->post_message(*m);
+  }
+  while (auto m = f.mqtt != nullptr ? f.mqtt->take_message() : std::nullopt) {
     std::cout << "msg: " << *m << "\n";
   }
   std::cout.flush();
 }
 
+// --http-token, or the first line of --http-token-file (surrounding blanks dropped).
+std::string http_token(const ServeArgs& a) {
+  if (a.http_token_file.empty()) return a.http_token;
+  require_readable(a.http_token_file);
+  std::ifstream f(a.http_token_file);
+  std::string line;
+  std::getline(f, line);
+  const auto first = line.find_first_not_of(" \t\r");
+  const auto last = line.find_last_not_of(" \t\r");
+  if (first == std::string::npos) {
+    throw UsageError("--http-token-file " + a.http_token_file + ": the file holds no token");
+  }
+  return line.substr(first, last - first + 1);
+}
+
+// The console on standard input until `quit`, SIGINT or SIGTERM (at the end of standard input it
+// runs on as a daemon).
+void run_console(runtime::Controller& controller, const FrontEnds& f) {
+  bool stdin_open = true;
+  bool quit = false;
+  std::string pending;
+  while (!g_stop.load() && !quit) {
+    pollfd p{STDIN_FILENO, POLLIN, 0};
+    const int rc = stdin_open ? ::poll(&p, 1, 100) : (::usleep(100000), 0);
+    if (rc > 0) {
+      char buf[4096];
+      const ssize_t n = ::read(STDIN_FILENO, buf, sizeof buf);
+      if (n <= 0) {
+        stdin_open = false;  // a daemon: runs on until SIGINT / SIGTERM
+      } else {
+        pending.append(buf, static_cast<std::size_t>(n));
+      }
+      for (auto nl = pending.find('\n'); nl != std::string::npos && !quit;
+           nl = pending.find('\n')) {
+        const std::string line = pending.substr(0, nl);
+        pending.erase(0, nl + 1);
+        const std::string answer = console_command(controller, line, quit);
+        // A program loaded from the console: the web page draws it, telemetry names it.
+        if (answer == "ok" && line.starts_with("load ")) {
+          std::istringstream words(line.substr(5));
+          std::string path;
+          words >> path;
+          if (f.web != nullptr) f.web->program_loaded(path);
+          if (f.mqtt != nullptr) f.mqtt->set_program(path);
+          if (f.shdr != nullptr) f.shdr->set_program(path);
+        }
+        if (!answer.empty()) std::cout << answer << "\n";
+        std::cout.flush();
+      }
+    }
+    print_messages(controller, f);
+  }
+}
+
+// --http: the web page, or a usage error (address, token rule, bind).
+std::unique_ptr<hmi::HttpServer> start_web(runtime::Controller& controller, const ServeArgs& a,
+                                           const std::string& token) {
+  if (a.http.empty()) return nullptr;
+  try {
+    hmi::HttpOptions o;
+    o.address = a.http;
+    o.token = token;
+    return std::make_unique<hmi::HttpServer>(controller, o);
+  } catch (const std::runtime_error& e) {
+    throw UsageError(e.what());
+  }
+}
+
 }  // namespace
 
 int command_serve(const ServeArgs& a) {
-  if (!a.http.empty()) {
-    throw UsageError(
-        "--http: this front end is not part of cncore yet; drive the controller "
-        "from standard input or a Grbl sender (docs/runtime.md)");
+  if (a.http.empty() && (!a.http_token.empty() || !a.http_token_file.empty())) {
+    throw UsageError("--http-token and --http-token-file go with --http");
   }
+  const std::string token = a.http.empty() ? "" : http_token(a);
   MachineConfig machine = machine_from(a.machine);
   const runtime::ControllerOptions options = controller_options(a);
   if (!a.program.empty()) require_readable(a.program);
@@ -200,44 +279,27 @@ int command_serve(const ServeArgs& a) {
   } catch (const std::runtime_error& e) {
     throw UsageError(e.what());
   }
+  std::unique_ptr<hmi::HttpServer> web = start_web(controller, a, token);
   std::cout << "cncore serve: " << machine.name << ", period " << machine.period_s * 1000
             << " ms, servo " << a.servo << "; commands on stdin\n";
   for (const auto& e : endpoints) std::cout << e->description() << "\n";
+  if (web) {
+    std::cout << "web page on " << web->url() << (token.empty() ? "" : " (token set)") << "\n";
+  }
   if (!a.program.empty()) {
     const runtime::Result r = controller.load_program(a.program);
     if (!r.ok) throw UsageError("--program: " + r.error);
+    if (web) web->program_loaded(a.program);
     if (a.start) {
       const runtime::Result s = controller.cycle_start();
       if (!s.ok) throw UsageError("--start: " + s.error);
     }
   }
-  print_messages(controller, mqtt.get());
-  bool stdin_open = true;
-  bool quit = false;
-  std::string pending;
-  while (!g_stop.load() && !quit) {
-    pollfd p{STDIN_FILENO, POLLIN, 0};
-    const int rc = stdin_open ? ::poll(&p, 1, 100) : (::usleep(100000), 0);
-    if (rc > 0) {
-      char buf[4096];
-      const ssize_t n = ::read(STDIN_FILENO, buf, sizeof buf);
-      if (n <= 0) {
-        stdin_open = false;  // a daemon: runs on until SIGINT / SIGTERM
-      } else {
-        pending.append(buf, static_cast<std::size_t>(n));
-      }
-      for (auto nl = pending.find('\n'); nl != std::string::npos && !quit;
-           nl = pending.find('\n')) {
-        const std::string line = pending.substr(0, nl);
-        pending.erase(0, nl + 1);
-        const std::string answer = console_command(controller, line, quit);
-        if (!answer.empty()) std::cout << answer << "\n";
-        std::cout.flush();
-      }
-    }
-    print_messages(controller, mqtt.get());
-  }
+  const FrontEnds front{web.get(), mqtt.get(), shdr ? &*shdr : nullptr};
+  print_messages(controller, front);
+  run_console(controller, front);
   endpoints.clear();  // no sender acts during the stop
+  web.reset();
   if (recorder) {
     // The controlled stop happens in the controller's destructor; record it too.
     controller.reset();

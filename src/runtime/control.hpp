@@ -70,6 +70,9 @@ struct Status {
   double feed_override_pct = 100;
   double rapid_override_pct = 100;
   double load_pct = 0;                // spindle load (0 without a load source)
+  double spindle_rpm = 0;             // the last S word the tool has reached
+  bool spindle_on = false;            // M3/M4 reached, M5 not since
+  std::uint32_t tool = 0;             // the tool in the spindle (T word, then M6), 0: none
   std::uint32_t blocks_queued = 0;    // blocks planned ahead of the kernel (ring)
   std::uint64_t overruns = 0;         // cycles that started after their deadline
   std::uint64_t starved_cycles = 0;   // cycles whose kernel wanted a block the planner lacked

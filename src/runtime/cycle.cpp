@@ -253,6 +253,7 @@ void CycleLoop::program_cycle(motion::Sample& s) {
   }
   status_.line = s.line;
   speed_mm_s_ = s.feed_mm_min / 60;
+  note_aux(s);
   const bool single_block_pause = s.aux_value == 0 && s.aux_p == kSingleBlockPause;
   const bool pause =
       s.aux_letter == 'M' &&
@@ -271,8 +272,18 @@ void CycleLoop::program_cycle(motion::Sample& s) {
     retire_job(JobEnd::kReset);
     status_.resetting = false;
     status_.hold_complete = false;
+    status_.spindle_on = false;  // a reset ends the program and stops the spindle
     status_.state = MachineState::kIdle;
   }
+}
+
+void CycleLoop::note_aux(const motion::Sample& s) {
+  if (s.aux_letter == 'S') status_.spindle_rpm = s.aux_value;
+  if (s.aux_letter == 'T') tool_prepared_ = static_cast<std::uint32_t>(s.aux_value);
+  if (s.aux_letter != 'M') return;
+  if (s.aux_value == 3 || s.aux_value == 4) status_.spindle_on = true;
+  if (s.aux_value == 5 || s.aux_value == 2 || s.aux_value == 30) status_.spindle_on = false;
+  if (s.aux_value == 6) status_.tool = tool_prepared_;
 }
 
 void CycleLoop::motion_cycle(motion::Sample& s) {
@@ -379,6 +390,7 @@ void CycleLoop::raise_alarm(AlarmCode alarm, std::uint32_t line) {
   status_.state = MachineState::kAlarm;
   status_.alarm = alarm;
   status_.alarm_line = line;
+  status_.spindle_on = false;  // an alarm stops the spindle with the axes
 }
 
 void CycleLoop::finish_outputs(std::uint64_t n, motion::Sample& s) {

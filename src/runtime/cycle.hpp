@@ -50,6 +50,7 @@ class CycleLoop {
   void start_job(Job* job, std::uint64_t n, bool mdi);
   void retire_job(JobEnd end);
   void program_cycle(motion::Sample& s);
+  void note_aux(const motion::Sample& s);  // spindle and tool from the M/S/T events reached
   void feed_kernel();
   void motion_cycle(motion::Sample& s);
   void homing_step();
@@ -66,6 +67,7 @@ class CycleLoop {
   Job* job_ = nullptr;
   bool ended_sent_ = false;
   bool paused_by_program_ = false;
+  std::uint32_t tool_prepared_ = 0;  // the last T word; M6 puts it in the spindle
   LineMotion line_;
   JogRequest pending_jog_;
   bool jog_pending_ = false;
