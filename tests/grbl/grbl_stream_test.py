@@ -108,10 +108,10 @@ def test_errors_and_reset(cncore, tmp):
         rep = c.wait_state("Idle", 10)
         x, y = position(rep)[:2]
         check(abs(math.hypot(x, y) - 50) < 0.01, f"the reset stopped the tool on the circle ({rep})")
-        # 6 000 dwells of 10 ms: the planner's ring (4 096 blocks) fills, so the queue fills
-        # behind it and Bf: shows it; then a soft reset ends it.
+        # 20 000 dwells of 10 ms: the kernel's buffer (10 000 blocks) and the planner's ring
+        # (4 096) fill, so the queue fills behind them and Bf: shows it; then a soft reset ends it.
         c.command("$10=2")
-        s.stream(["G4 P0.01"] * 6000, poll_s=0.05, stop_after=4.0)
+        s.stream(["G4 P0.01"] * 20000, poll_s=0.05, stop_after=8.0)
         free = s.buffer_free()
         check(free is not None and free < 64, f"Bf: reports the queue filling ({free} of 64 free)")
         s.reset_and_unlock()

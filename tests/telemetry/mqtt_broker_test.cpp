@@ -93,7 +93,8 @@ TEST_F(MqttBroker, AServedProgramsEventsArriveInOrderWithTheServedCycleTime) {
   Subscriber sub(dir, broker.port(), "shop/mill1");
   ASSERT_TRUE(sub.ready());
   // In the M0 pause the console waits 0.3 s (for a state that does not come), then resumes.
-  write_text(dir / "console.txt", "wait Hold 30\nwait Alarm 0.3\nstart\nwait Idle 30\nquit\n");
+  write_text(dir / "console.txt",
+             "wait Hold 30\nwait Alarm 0.3\nstart\nwait Idle 30\nwait Alarm 0.3\nquit\n");
   std::vector<std::string> args =
       serve_args("mqtt://127.0.0.1:" + std::to_string(broker.port()) + "/shop/mill1");
   args.insert(args.end(), {"--trajectory", (dir / "served.csv").string()});
