@@ -1,14 +1,13 @@
 // The operator switches of `cncore serve` measured on the set-points: single block switched on
 // while a program runs stops the tool at the end of a programmed block; block delete decides
 // whether "/" lines run, and a program is checked again at cycle start with the switch in force.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
-
-#include <fmt/format.h>
 
 #include "served.hpp"
 
