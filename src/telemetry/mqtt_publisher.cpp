@@ -4,9 +4,14 @@
 // pause. Nothing is subscribed: no message from the broker reaches the controller.
 #include <fmt/format.h>
 #include <mqtt/async_client.h>
+#include <netdb.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <deque>
 #include <mutex>
 #include <stdexcept>
@@ -15,7 +20,33 @@
 #include "telemetry/telemetry.hpp"
 
 namespace cncore::telemetry {
+
 namespace {
+
+// Whether HOST:PORT accepts a TCP connection within a second.
+bool tcp_reachable(const std::string& host, std::uint16_t port) {
+  addrinfo hints{};
+  hints.ai_socktype = SOCK_STREAM;
+  addrinfo* found = nullptr;
+  if (::getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &found) != 0) return false;
+  bool ok = false;
+  for (addrinfo* a = found; a != nullptr && !ok; a = a->ai_next) {
+    const int fd = ::socket(a->ai_family, a->ai_socktype | SOCK_NONBLOCK, a->ai_protocol);
+    if (fd < 0) continue;
+    if (::connect(fd, a->ai_addr, a->ai_addrlen) == 0) {
+      ok = true;
+    } else if (errno == EINPROGRESS) {
+      pollfd p{fd, POLLOUT, 0};
+      int err = 0;
+      socklen_t len = sizeof err;
+      ok = ::poll(&p, 1, 1000) == 1 && ::getsockopt(fd, SOL_SOCKET, SO_ERROR, &err, &len) == 0 &&
+           err == 0;
+    }
+    ::close(fd);
+  }
+  ::freeaddrinfo(found);
+  return ok;
+}
 
 using Steady = std::chrono::steady_clock;
 
@@ -70,7 +101,6 @@ struct MqttPublisher::Impl {
   std::mutex mutex;  // guards the fields below
   std::string program;
   std::deque<std::string> messages;
-  std::string tls_error;  // the last TLS handshake error Paho reported
 
   mqtt::token_ptr connecting;  // the publisher thread's connection attempt
   Steady::duration retry = kFirstRetry;
@@ -104,11 +134,11 @@ struct MqttPublisher::Impl {
         .will(mqtt::message(will.topic, will.payload, will.qos, will.retain));
     if (!options.user.empty()) b.user_name(options.user).password(options.password);
     if (target.tls) {
+      // No TLS error handler: Paho C++ 1.2 hands the C library a pointer into the copy of the
+      // options that connect() takes by value, which is gone when the handshake fails (ASan:
+      // stack-use-after-scope). failure() tells a refused handshake from a broker that is down.
       mqtt::ssl_options_builder ssl;
-      ssl.enable_server_cert_auth(true).verify(true).error_handler([this](const std::string& e) {
-        const std::lock_guard lock(mutex);
-        tls_error = e.substr(0, e.find_last_not_of(" \n\r:") + 1);
-      });
+      ssl.enable_server_cert_auth(true).verify(true);
       if (!options.ca_file.empty()) ssl.trust_store(options.ca_file);
       b.ssl(ssl.finalize());
     }
@@ -117,18 +147,20 @@ struct MqttPublisher::Impl {
 
   // Why a connection attempt failed, for the operator; `fatal`: retrying cannot help.
   std::string failure(int rc, const std::string& what, bool& fatal) {
-    std::string tls;
-    {
-      const std::lock_guard lock(mutex);
-      tls = std::exchange(tls_error, {});
-    }
     fatal = true;
     if (rc == kBadUserNameOrPassword || rc == kNotAuthorized) {
       return fmt::format("{}: the broker refused the login of user '{}' (return code {}: {})",
                          options.url, options.user, rc,
                          rc == kNotAuthorized ? "not authorised" : "bad user name or password");
     }
-    if (!tls.empty()) return fmt::format("{}: TLS handshake failed: {}", options.url, tls);
+    // TLS: a broker that accepts the TCP connection but not the session refused the handshake
+    // (its certificate not trusted, or no TLS there); retrying cannot help.
+    if (target.tls && tcp_reachable(target.host, target.port)) {
+      return fmt::format(
+          "{}: TLS handshake failed (is the broker's certificate signed by the "
+          "--mqtt-ca authority?): {}",
+          options.url, what);
+    }
     fatal = false;
     return fmt::format("{}: no connection ({})", options.url, what);
   }
