@@ -52,11 +52,13 @@ def test_speed(cncore, tmp, chords):
     t = motion_time(rows)
     check(not s.errors and not s.alarms, f"{chords} chords: streamed without error ({s.errors})")
     # The figure (docs/senders.md) comes from tools/grbl-stream-time.py; here the bound only
-    # catches a starved look-ahead (one job per line is 5x), with room for a loaded machine
-    # and the sanitizer build.
-    check(t <= 1.15 * t_run,
-          f"{chords} chords over TCP: {t:.3f} s streamed against {t_run:.3f} s in run "
-          f"({t / t_run:.3f}x, at most 1.15x)")
+    # catches a starved look-ahead (one job per line is 5x), with room for a loaded machine.
+    if os.environ.get("CNCORE_SANITIZED"):
+        print(f"note {chords} chords over TCP: {t / t_run:.3f}x run (sanitizer build: not bounded)")
+    else:
+        check(t <= 1.15 * t_run,
+              f"{chords} chords over TCP: {t:.3f} s streamed against {t_run:.3f} s in run "
+              f"({t / t_run:.3f}x, at most 1.15x)")
     check(all(abs(a - b) < 1e-6 for a, b in zip(rows[-1][1:], end_run)),
           f"{chords} chords: ends where run ends ({rows[-1][1:]} / {end_run})")
     check(s.state_names()[-3:] == ["Idle", "Run", "Idle"] or s.state_names()[-2:] == ["Run", "Idle"],

@@ -84,8 +84,14 @@ TEST(Stream, ACircleStreamedLineByLineRunsAsOneJobAtTheSpeedOfRun) {
   const double t_served = motion_time_s(served, m.period_s);
   const double t_run = motion_time_s(ref, m.period_s);
   EXPECT_GT(t_run, 6.0);
-  // Not starved (one job per line is 5x); room for a loaded machine and the sanitizer build.
-  EXPECT_LE(t_served, 1.15 * t_run) << "served " << t_served << " s, run " << t_run << " s";
+  // Not starved (one job per line is 5x), with room for a loaded machine. Under AddressSanitizer
+  // each line's check runs several times slower: only the one-job-per-line failure is caught.
+#ifdef __SANITIZE_ADDRESS__
+  constexpr double kBound = 3.0;
+#else
+  constexpr double kBound = 1.15;
+#endif
+  EXPECT_LE(t_served, kBound * t_run) << "served " << t_served << " s, run " << t_run << " s";
   for (std::size_t i = 0; i < 3; ++i) {
     EXPECT_NEAR(sv.c().status().commanded[i], ref.back().position[i], 1e-9);
   }
