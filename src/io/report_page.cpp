@@ -119,6 +119,17 @@ std::string basename_of(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
+// The look both reports share; each adds its own rules after it.
+constexpr std::string_view kBaseStyle = R"CSS(
+body { font: 14px/1.4 system-ui, sans-serif; margin: 20px; color: #222; max-width: 1160px; }
+h1 { font-size: 20px; margin: 0 0 4px; } h2 { font-size: 16px; margin: 22px 0 6px; }
+table { border-collapse: collapse; } td, th { padding: 2px 10px 2px 0; text-align: left; vertical-align: top; }
+td.num, th.num { text-align: right; font-variant-numeric: tabular-nums; }
+code { background: #f4f4f4; padding: 0 3px; }
+.warn { color: #a40; } #cncore-status { color: #c00; font-weight: bold; }
+.note { color: #666; font-size: 12px; }
+)CSS";
+
 std::string head(const std::string& title, std::string_view style) {
   std::string o;
   o.reserve(assets::uplot_css().size() + style.size() + 1024);
@@ -126,6 +137,7 @@ std::string head(const std::string& title, std::string_view style) {
   o += "<meta name=\"generator\" content=\"cncore\">\n";
   o += "<title>" + html_escape(title) + "</title>\n<style>";
   o += assets::uplot_css();
+  o += kBaseStyle;
   o += style;
   o += "</style>\n";
   o += "<script>window.cncoreErrors=[];window.addEventListener('error',function(e){"

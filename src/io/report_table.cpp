@@ -159,14 +159,7 @@ constexpr std::string_view kPageScript = R"JS(
 )JS";
 
 constexpr std::string_view kStyle = R"CSS(
-body { font: 14px/1.4 system-ui, sans-serif; margin: 20px; color: #222; max-width: 1160px; }
-h1 { font-size: 20px; margin: 0 0 4px; } h2 { font-size: 16px; margin: 22px 0 6px; }
-table { border-collapse: collapse; } td, th { padding: 2px 10px 2px 0; text-align: left; vertical-align: top; }
 table.events td, table.events th { border-bottom: 1px solid #ddd; padding: 3px 8px; }
-td.num, th.num { text-align: right; font-variant-numeric: tabular-nums; }
-code { background: #f4f4f4; padding: 0 3px; }
-.warn { color: #a40; } #cncore-status { color: #c00; font-weight: bold; }
-.note { color: #666; font-size: 12px; }
 )CSS";
 
 }  // namespace
