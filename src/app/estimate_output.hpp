@@ -21,9 +21,12 @@ struct ProgramResult {
   double cycle_time_s = 0;
   double path_length_mm = 0;
   std::uint64_t blocks = 0, cycles = 0;
-  // Time lost against the programmed feed on the slowest lines run reports (at most five),
-  // Σ dt·(1 − v/F) over their cycles (docs/cli.md, slowest spots).
+  // The whole program's time lost against the programmed feed × override (the summary's
+  // `time_lost_s`); the slowest lines are a part of it.
   double time_lost_s = 0;
+  // Time lost against F as written, by cause (the summary's `time_lost_by_cause_s`, in the order
+  // of io::LossCause); empty when the summary has none.
+  std::vector<double> lost_by_cause_s;
   std::vector<SlowLine> slowest;
   double wall_s = 0;  // wall-clock time of the program's worker process
 };
@@ -32,7 +35,7 @@ struct ProgramResult {
 bool read_summary_json(const std::string& text, ProgramResult& r);
 
 // One row per program, in the order given: program,status,cycle_time_s,path_length_mm,blocks,
-// cycles,time_lost_s,slowest_lines,error.
+// cycles,time_lost_s,lost_<cause>_s for each cause,slowest_lines,error.
 std::string results_csv(const std::vector<ProgramResult>& results);
 
 // One self-contained page ranking the programs by cycle time (failed programs last).

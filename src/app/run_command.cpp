@@ -194,9 +194,10 @@ int command_run(const RunArgs& a) {
   io::SummaryObserver summary(machine, a.mode);
   std::optional<io::AtomicOutputFile> html;
   std::optional<io::ReportObserver> report;
-  if (!a.report.empty()) {
-    html.emplace(a.report);
-    // The report explains the summary's own time lost (the summary is observed first).
+  if (!a.report.empty()) html.emplace(a.report);
+  if (html || json) {
+    // The report explains the summary's own time lost (the summary is observed first); its
+    // accounting by cause also goes into the summary JSON.
     report.emplace(machine, a.mode, io::ReportOptions{}, &summary);
   }
 
@@ -238,6 +239,7 @@ int command_run(const RunArgs& a) {
   if (json) {
     std::string text = io::summary_to_json(summary.summary(), machine);
     if (cutting) text = cut::summary_json_with_cutting(text, *cutting, machine.cutting);
+    text = io::summary_json_with_losses(text, report->losses());
     json->write(text);
   }
   // The height map's PNG, for its file and the report.

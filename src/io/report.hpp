@@ -95,6 +95,10 @@ struct ReportLosses {
   }
 };
 
+// The summary JSON text with `time_lost_by_cause_s` added: an object with one key per cause
+// (loss_cause_name with '_' for ' ') and `total`, their sum.
+std::string summary_json_with_losses(const std::string& summary_json, const ReportLosses& losses);
+
 struct ReportOptions {
   std::size_t buckets = 2048;       // time-series buckets after a merge (2× before)
   std::size_t path_points = 16384;  // top-view points kept at most

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <nlohmann/json.hpp>
 
 #include "io/report.hpp"
 
@@ -328,6 +329,19 @@ std::vector<ReportSlowSpot> ReportObserver::slowest() const {
 
 std::vector<ReportSlowSpot> ReportObserver::slowest_rapids() const {
   return ranked(top_rapid_, options_.slow_spots);
+}
+
+std::string summary_json_with_losses(const std::string& summary_json, const ReportLosses& losses) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::parse(summary_json);
+  nlohmann::ordered_json c = nlohmann::ordered_json::object();
+  for (std::size_t i = 0; i < kLossCauses; ++i) {
+    std::string key = loss_cause_name(static_cast<LossCause>(i));
+    std::replace(key.begin(), key.end(), ' ', '_');
+    c[key] = losses.cause_s[i];
+  }
+  c["total"] = losses.total_s();
+  j["time_lost_by_cause_s"] = c;
+  return j.dump(2) + "\n";
 }
 
 }  // namespace cncore::io

@@ -195,6 +195,42 @@ TEST_F(Estimate, SlowestLinesAndTimeLostComeFromTheRun) {
   EXPECT_EQ(std::stoull(row.at("cycles")), j.at("cycles").get<std::uint64_t>());
 }
 
+// A zigzag at F20000 on the built-in machine (max feed 10 000 mm/min): its loss by cause names
+// the feed limit (exactly the time at 10 000 instead of 20 000 mm/min over the path) and the
+// corners, the columns equal the run's summary and add up to the run's total.
+TEST_F(Estimate, TimeLostByCauseComesFromTheRun) {
+  std::string program = "G21 G90 G17\nG0 X0 Y0 Z0\nG1 F20000\n";
+  for (int i = 1; i <= 20; ++i) {
+    program += "X" + std::to_string(10 * i) + " Y" + std::to_string(i % 2 == 0 ? 0 : 10) + "\n";
+  }
+  program += "M2\n";
+  write_file(dir_ / "zigzag.ngc", program);
+  ASSERT_EQ(cncore("run zigzag.ngc --summary s.json").code, 0);
+  const auto j = nlohmann::json::parse(slurp(dir_ / "s.json"));
+  const auto& causes = j.at("time_lost_by_cause_s");
+  ASSERT_EQ(cncore("estimate zigzag.ngc --csv out.csv").code, 0);
+  const auto row = read_rows(dir_ / "out.csv").at("zigzag.ngc");
+  double sum_s = 0;
+  for (const char* c :
+       {"corners", "arcs", "short_segments", "stops", "acceleration", "feed_limit", "override"}) {
+    SCOPED_TRACE(c);
+    const double s = causes.at(c).get<double>();
+    EXPECT_NEAR(std::stod(row.at(std::string("lost_") + c + "_s")), s, 1e-6);
+    sum_s += s;
+  }
+  EXPECT_NEAR(sum_s, causes.at("total").get<double>(), 1e-9);
+  const double length_mm = 20 * std::hypot(10.0, 10.0);
+  // The executed path rounds the corners within the contour tolerance.
+  EXPECT_NEAR(j.at("path_length_mm").get<double>(), length_mm, 0.01);
+  EXPECT_NEAR(causes.at("feed_limit").get<double>(),
+              length_mm * 60 / 10000 - length_mm * 60 / 20000, 1e-3);
+  EXPECT_GT(causes.at("corners").get<double>(), 0.01);
+  EXPECT_EQ(causes.at("override").get<double>(), 0);
+  // Against F as written: the summary's loss (against F capped by the machine) plus the cap.
+  EXPECT_NEAR(causes.at("total").get<double>(),
+              j.at("time_lost_s").get<double>() + causes.at("feed_limit").get<double>(), 1e-3);
+}
+
 TEST_F(Estimate, AFolderStandsForItsPrograms) {
   fs::create_directories(dir_ / "batch" / "sub");
   fs::copy_file(example("seed-line-arc-line.ngc"), dir_ / "batch" / "a.ngc");
