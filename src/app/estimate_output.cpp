@@ -60,7 +60,7 @@ std::string causes_cell(const std::vector<double>& lost_s, double widest_s) {
   for (std::size_t i = 0; i < lost_s.size(); ++i) {
     if (lost_s[i] <= 0 || widest_s <= 0) continue;
     bar += fmt::format(
-        "<span class=\"c\" style=\"width:{:.2f}%;background:{}\" title=\"{}: {:.3f} s\"></span>",
+        R"(<span class="c" style="width:{:.2f}%;background:{}" title="{}: {:.3f} s"></span>)",
         100 * lost_s[i] / widest_s, kCauseColour[i],
         io::loss_cause_name(static_cast<io::LossCause>(i)), lost_s[i]);
   }
