@@ -180,6 +180,7 @@ void Connection::soft_reset(std::string& out) {
   const runtime::Status s = controller_.status();
   if (moving(s.state)) (void)controller_.reset();
   if (s.state == MachineState::kCheck) (void)controller_.set_check_mode(false);
+  controller_.forget_modes();  // Grbl's parser starts afresh after a soft reset
   rx_.clear();
   discard_line_ = false;
   busy_ = homing_ = door_ = sleep_ = false;
@@ -292,7 +293,7 @@ bool Connection::dollar(const std::string& raw, std::string& out) {
     return true;
   }
   if (line == "$G") {
-    line_out(out, fmt::format("[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F{:.0f} S0]", s.feed_mm_min));
+    line_out(out, gcode_modes(controller_.parser_state(), s));
     line_out(out, "ok");
     return true;
   }

@@ -29,4 +29,10 @@ std::string state_text(const runtime::Status& s, const ReportInputs& in);
 std::string status_report(const runtime::Status& s, const MachineConfig& machine,
                           const ReportInputs& in);
 
+// `$G`'s `[GC:…]` line: motion, coordinate system, plane, units, distance and feed modes, spindle,
+// coolant, tool, F (in program units per minute, or per revolution in G95) and S, as Grbl 1.1
+// orders them. The G words and F, S, T are the parser's (`parser`); spindle and coolant are the
+// machine's (`s`), which the interpreter's modal state does not hold.
+std::string gcode_modes(const interp::ModalState& parser, const runtime::Status& s);
+
 }  // namespace cncore::grbl

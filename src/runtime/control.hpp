@@ -19,6 +19,7 @@
 
 #include "config/machine_config.hpp"
 #include "core/geometry.hpp"
+#include "interpreter/modal_state.hpp"
 #include "motion/kernel.hpp"
 #include "runtime/state_machine.hpp"
 
@@ -72,6 +73,9 @@ struct Status {
   double load_pct = 0;                // spindle load (0 without a load source)
   double spindle_rpm = 0;             // the last S word the tool has reached
   bool spindle_on = false;            // M3/M4 reached, M5 not since
+  bool spindle_ccw = false;           // the last of M3/M4 was M4
+  bool coolant_mist = false;          // M7 reached, M9 not since
+  bool coolant_flood = false;         // M8 reached, M9 not since
   std::uint32_t tool = 0;             // the tool in the spindle (T word, then M6), 0: none
   std::uint32_t blocks_queued = 0;    // blocks planned ahead of the kernel (ring)
   std::uint64_t overruns = 0;         // cycles that started after their deadline
@@ -193,6 +197,13 @@ class Controller {
   // queued lines. In Check, lines are interpreted and nothing moves.
   StreamReply stream_line(const std::string& line);
   StreamRoom stream_room() const;
+  // The interpreter's modal state after the last line it took: a stream's last checked line
+  // while a stream is open, else what the last completed program or MDI line left (the start
+  // state when none). What a sender's `$G` shows.
+  interp::ModalState parser_state() const;
+  // The next program, MDI line or stream starts from the start modes (G80 G54 G17 G21 G90 G94,
+  // no F, S or T), as a Grbl board's soft reset leaves its parser. Offsets and parameters stay.
+  void forget_modes();
   Result set_feed_override(double pct);
   Result set_rapid_override(double pct);
   Result set_switches(const Switches& switches);

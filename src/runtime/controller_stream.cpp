@@ -32,13 +32,17 @@ StreamReply Controller::Impl::start_stream(const std::string& line, const Status
     ~Closer() { queue->close(); }
   };
   auto closer = std::make_shared<Closer>(queue);
-  auto job_link = std::make_shared<std::atomic<const Job*>>(nullptr);
+  auto job_link = std::make_shared<std::atomic<Job*>>(nullptr);
   auto pull = [closer, job_link](std::string& out) {
-    const Job* j = job_link->load(std::memory_order_acquire);
+    Job* j = job_link->load(std::memory_order_acquire);
     // The stream may end only where the tool has run out of blocks and stands (not held).
-    return closer->queue->pull(out, j->cancel, [j] {
+    const bool more = closer->queue->pull(out, j->cancel, [j] {
       return j->ring.size() == 0 && j->standing.load(std::memory_order_relaxed);
     });
+    // A dropped stream (reset, E-stop) is an abandoned program, not a completed one: its modal
+    // state is not carried to the next (the reset's own cancel may come a moment later).
+    if (!more && closer->queue->dropped()) j->cancel.store(true, std::memory_order_release);
+    return more;
   };
   const MachineConfig m = machine_at(st);
   auto in = std::make_unique<interp::Interpreter>(interp::Interpreter::FromLines{}, std::move(pull),
@@ -110,6 +114,26 @@ StreamRoom Controller::stream_room() const {
   }
   const std::size_t capacity = d.options.stream_lines;
   return {queue && !queue->closed() ? queue->room() : capacity, capacity};
+}
+
+interp::ModalState Controller::parser_state() const {
+  Impl& d = *impl_;
+  const std::lock_guard lock(d.control);
+  bool streaming = d.checker_in_check;
+  {
+    const std::lock_guard data_lock(d.data);
+    streaming = streaming || (d.stream && !d.stream->closed());
+    if (!streaming) return d.modal.value_or(interp::ModalState{});
+  }
+  return d.checker.modal.value_or(interp::ModalState{});
+}
+
+void Controller::forget_modes() {
+  Impl& d = *impl_;
+  const std::lock_guard lock(d.control);
+  d.checker_in_check = false;
+  const std::lock_guard data_lock(d.data);
+  d.modal.reset();
 }
 
 }  // namespace cncore::runtime

@@ -273,6 +273,7 @@ void CycleLoop::program_cycle(motion::Sample& s) {
     status_.resetting = false;
     status_.hold_complete = false;
     status_.spindle_on = false;  // a reset ends the program and stops the spindle
+    status_.coolant_mist = status_.coolant_flood = false;
     status_.state = MachineState::kIdle;
   }
 }
@@ -281,8 +282,16 @@ void CycleLoop::note_aux(const motion::Sample& s) {
   if (s.aux_letter == 'S') status_.spindle_rpm = s.aux_value;
   if (s.aux_letter == 'T') tool_prepared_ = static_cast<std::uint32_t>(s.aux_value);
   if (s.aux_letter != 'M') return;
-  if (s.aux_value == 3 || s.aux_value == 4) status_.spindle_on = true;
+  if (s.aux_value == 3 || s.aux_value == 4) {
+    status_.spindle_on = true;
+    status_.spindle_ccw = s.aux_value == 4;
+  }
   if (s.aux_value == 5 || s.aux_value == 2 || s.aux_value == 30) status_.spindle_on = false;
+  if (s.aux_value == 7) status_.coolant_mist = true;
+  if (s.aux_value == 8) status_.coolant_flood = true;
+  if (s.aux_value == 9 || s.aux_value == 2 || s.aux_value == 30) {
+    status_.coolant_mist = status_.coolant_flood = false;
+  }
   if (s.aux_value == 6) status_.tool = tool_prepared_;
 }
 
@@ -391,6 +400,7 @@ void CycleLoop::raise_alarm(AlarmCode alarm, std::uint32_t line) {
   status_.alarm = alarm;
   status_.alarm_line = line;
   status_.spindle_on = false;  // an alarm stops the spindle with the axes
+  status_.coolant_mist = status_.coolant_flood = false;
 }
 
 void CycleLoop::finish_outputs(std::uint64_t n, motion::Sample& s) {

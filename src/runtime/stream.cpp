@@ -75,10 +75,16 @@ bool LineQueue::pull(std::string& line, const std::atomic<bool>& cancel,
 void LineQueue::close() {
   {
     const std::lock_guard lock(mutex_);
+    dropped_ = dropped_ || !closed_;
     closed_ = true;
     lines_.clear();
   }
   arrived_.notify_all();
+}
+
+bool LineQueue::dropped() const {
+  const std::lock_guard lock(mutex_);
+  return dropped_;
 }
 
 bool LineQueue::closed() const {

@@ -40,6 +40,8 @@ class LineQueue {
   // Ends the stream and drops its lines (reset, alarm).
   void close();
   bool closed() const;
+  // close() ended it (not its program end, not an idle end): the stream was abandoned.
+  bool dropped() const;
   std::size_t room() const;
   std::size_t capacity() const { return capacity_; }
 
@@ -49,8 +51,9 @@ class LineQueue {
   mutable std::mutex mutex_;
   std::condition_variable arrived_;
   std::deque<std::string> lines_;
-  bool closed_ = false;  // nothing more is taken
-  bool sealed_ = false;  // the program's end was taken: closed once drained
+  bool closed_ = false;   // nothing more is taken
+  bool dropped_ = false;  // closed by close()
+  bool sealed_ = false;   // the program's end was taken: closed once drained
   std::chrono::steady_clock::time_point last_activity_ = std::chrono::steady_clock::now();
 };
 

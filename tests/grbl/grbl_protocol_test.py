@@ -137,6 +137,44 @@ def test_gcode(c):
     check(10 < position(rep)[0] < 30, f"0x18 stops the move on its way ({rep})")
 
 
+def gc_words(c):
+    got = expect_reply(c, "$G", "ok")
+    return got[0][len("[GC:"):-1].split() if got[0].startswith("[GC:") else []
+
+
+def test_modes(c):
+    """$G shows the parser's modes after the lines sent, and the machine's spindle and coolant;
+    the status report's FS: and A: show the spindle and coolant once reached."""
+    c.wait_state("Idle")
+    time.sleep(0.3)
+    words = gc_words(c)
+    # The soft reset abandoned the streamed G1 X30 F600: its modes are not carried.
+    check(words == ["G80", "G54", "G17", "G21", "G90", "G94", "M5", "M9", "T0", "F0", "S0"],
+          f"$G after a soft reset: the start modes ({words})")
+    for line in ("G18 G91 G20", "G55", "F100", "S1200 M4", "M8", "M7"):
+        expect_reply(c, line, "ok")
+    rep = c.wait_state("Idle")
+    time.sleep(0.3)
+    words = gc_words(c)
+    want = ["G80", "G55", "G18", "G20", "G91", "G94", "M4", "M7", "M8", "T0", "F100", "S1200"]
+    check(words == want, f"$G after G18 G91 G20, G55, F100 (in/min), S1200 M4, M8, M7 ({words})")
+    fs = None
+    acc = None
+    for _ in range(25):
+        rep = c.status()
+        fs = field(rep, "FS") or fs
+        acc = field(rep, "A") or acc
+    check(fs == "0,1200", f"FS: shows the spindle speed ({fs})")
+    check(acc == "CFM", f"A: spindle CCW, flood, mist ({acc})")
+    for line in ("M9 M5", "G17 G90 G21 G54"):
+        expect_reply(c, line, "ok")
+    c.wait_state("Idle")
+    time.sleep(0.3)
+    words = gc_words(c)
+    check(words[1:6] == ["G54", "G17", "G21", "G90", "G94"] and "M5" in words and "M9" in words
+          and words[-2] == "F2540", f"$G after M9 M5 G17 G90 G21 G54 ({words})")
+
+
 def test_jog(c):
     expect_reply(c, "$J=G91 X5 F3000", "ok")
     rep = c.wait_state("Idle")
@@ -252,6 +290,7 @@ def main():
             connect_checks(tcp, "tcp")
             test_settings(tcp, workdir)
             test_gcode(tcp)
+            test_modes(tcp)
             test_jog(tcp)
             test_check_mode(tcp)
             test_alarm(tcp, server)
