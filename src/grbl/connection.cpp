@@ -383,10 +383,29 @@ void Connection::write_setting(std::string_view line, std::string& out) {
     error_out(out, Error::kBadNumberFormat);
     return;
   }
-  if (const auto e = store_.settings.write(n, *v)) {
+  // As Grbl: settings change only while nothing moves, and then at once.
+  if (busy_ || moving(controller_.status().state)) {
+    error_out(out, Error::kIdleError);
+    return;
+  }
+  Settings next = store_.settings;
+  if (const auto e = next.write(n, *v)) {
     error_out(out, static_cast<Error>(*e));
     return;
   }
+  const runtime::MachineLimits now = controller_.limits();
+  MachineConfig m = controller_.machine();
+  runtime::apply_limits(m, now);
+  next.apply(m);
+  if (const runtime::MachineLimits wanted = runtime::limits_of(m); wanted != now) {
+    if (const runtime::Result r = controller_.set_limits(wanted); !r.ok) {
+      line_out(out, "[MSG:" + r.error + "]");
+      error_out(out,
+                moving(controller_.status().state) ? Error::kIdleError : Error::kInvalidStatement);
+      return;
+    }
+  }
+  store_.settings = next;
   store_.save();
   line_out(out, "ok");
 }
@@ -477,14 +496,15 @@ void Connection::jog(std::string_view body, std::string& out) {
   }
   r.feed_mm_min *= scale;
   const runtime::Status s = controller_.status();
+  const runtime::MachineLimits limits = controller_.limits();
   r.incremental = !absolute_work && !machine_coords;
   for (std::size_t a = 0; a < kMaxAxes; ++a) {
     if (((r.axes >> a) & 1U) == 0) continue;
     r.target[a] *= scale;
     if (!r.incremental && !machine_coords) r.target[a] += s.work_offset[a];
     const double end = r.incremental ? s.commanded[a] + r.target[a] : r.target[a];
-    const AxisConfig& ax = controller_.machine().axes[a];
-    if (ax.enabled && (end < ax.min_mm - 1e-9 || end > ax.max_mm + 1e-9)) {
+    const bool enabled = controller_.machine().axes[a].enabled;
+    if (enabled && (end < limits.min_mm[a] - 1e-9 || end > limits.max_mm[a] + 1e-9)) {
       error_out(out, Error::kTravelExceeded);
       return;
     }

@@ -10,6 +10,7 @@
 // so a status read after a call sees its effect; none of them waits for the machine to move.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -158,6 +159,20 @@ struct StreamRoom {
   std::size_t capacity = 0;
 };
 
+// The machine values that may change while cncore runs (a sender's Grbl settings $11, $24, $25,
+// $27, $110…, $120…, $130…): the rest of the configuration is fixed at start.
+struct MachineLimits {
+  double contour_tolerance_mm = 0;
+  double home_latch_mm_min = 0, home_search_mm_min = 0, home_pulloff_mm = 0;
+  std::array<double, kMaxAxes> max_speed_mm_min{}, max_accel_mm_s2{}, min_mm{}, max_mm{};
+  bool operator==(const MachineLimits&) const = default;
+};
+MachineLimits limits_of(const MachineConfig& machine);
+void apply_limits(MachineConfig& machine, const MachineLimits& limits);
+// Empty when the limits are usable (every speed, acceleration and tolerance > 0, finite, each
+// travel min < max), else what is wrong.
+std::string limits_error(const MachineLimits& limits, const MachineConfig& machine);
+
 class Controller {
  public:
   // Starts the threads. Throws InputError on a bad state file, std::runtime_error when a servo
@@ -171,7 +186,13 @@ class Controller {
 
   // A consistent copy of the latest published status (wait-free for the cycle thread).
   Status status() const;
+  // The configuration the controller started with (set_limits() does not change it).
   const MachineConfig& machine() const;
+  // The limits in force now: the configuration's, as set_limits() last changed them.
+  MachineLimits limits() const;
+  // Changes the running machine's limits. Only when nothing moves (Idle, Alarm or Check); the
+  // next program, MDI line, stream, jog and homing use them.
+  Result set_limits(const MachineLimits& limits);
   // Messages for the operator that arose outside a command (a program error met while running,
   // the real-time set-up): taken once each.
   std::optional<std::string> take_message();

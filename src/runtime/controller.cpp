@@ -68,7 +68,24 @@ Status Controller::status() const {
 }
 
 const MachineConfig& Controller::machine() const {
-  return impl_->machine;
+  return impl_->configured;
+}
+
+MachineLimits Controller::limits() const {
+  const std::lock_guard lock(impl_->control);
+  return limits_of(impl_->machine);
+}
+
+Result Controller::set_limits(const MachineLimits& limits) {
+  Impl& d = *impl_;
+  const std::lock_guard lock(d.control);
+  if (std::string e = limits_error(limits, d.machine); !e.empty()) return Result::fail(e);
+  if (Result r = d.allowed(Command::kLimits); !r.ok) return r;
+  if (d.status.load().resetting) return Result::fail("a reset is stopping the tool: wait for Idle");
+  apply_limits(d.machine, limits);
+  CycleCommand c = cycle_command(Command::kLimits);
+  c.limits = limits;
+  return d.send(c);
 }
 
 std::optional<std::string> Controller::take_message() {

@@ -47,7 +47,12 @@ inline bool is_moving(MachineState s) {
 
 struct Controller::Impl {
   Impl(MachineConfig m, const ControllerOptions& o)
-      : machine(std::move(m)), options(o), commands(256), applied(4096), state_dir(o.state_dir) {
+      : machine(std::move(m)),
+        configured(machine),
+        options(o),
+        commands(256),
+        applied(4096),
+        state_dir(o.state_dir) {
     if (machine.servo.kp_per_s * machine.period_s > 1) {
       throw std::runtime_error("servo.kp_per_s · motion.period_s must be ≤ 1 for a stable loop");
     }
@@ -274,7 +279,8 @@ struct Controller::Impl {
     if (q) q->close();
   }
 
-  MachineConfig machine;
+  MachineConfig machine;           // as running: set_limits() changes it (under `control`)
+  const MachineConfig configured;  // as started: what machine() shows to the other threads
   ControllerOptions options;
   SpscRing<CycleCommand> commands;
   std::unique_ptr<SpscRing<motion::Sample>> samples;

@@ -29,7 +29,7 @@ AxisVec clamp_to_travel(const MachineConfig& m, const AxisVec& from, const AxisV
 
 CycleLoop::CycleLoop(const MachineConfig& machine, const CycleLinks& links, const AxisVec& start,
                      const AxisVec& sim_position_error)
-    : machine_(machine), links_(links), sim_(machine, start, sim_position_error) {
+    : machine_(machine), links_(links), sim_(machine_, start, sim_position_error) {
   status_.commanded = start;
   status_.actual = start;
   // Homing order: Z first (the tool away from the part), then X, Y and the rotary axes.
@@ -122,6 +122,9 @@ void CycleLoop::apply(const CycleCommand& c, std::uint64_t n) {
       break;
     case Command::kCheckOff:
       status_.state = MachineState::kIdle;
+      break;
+    case Command::kLimits:
+      apply_limits(machine_, c.limits);  // doubles only: no allocation
       break;
     case Command::kLoad:
     case Command::kCount:

@@ -60,7 +60,7 @@ class CycleLoop {
 
   enum class HomePhase : std::uint8_t { kSearch, kStopping, kLatch, kPulloff };
 
-  const MachineConfig& machine_;
+  MachineConfig machine_;  // its own copy: kLimits changes it between two cycles
   CycleLinks links_;
   SimAxes sim_;
   Status status_;

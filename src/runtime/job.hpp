@@ -100,6 +100,7 @@ struct CycleCommand {
   Job* job = nullptr;  // kStart, kMdi
   JogRequest jog;
   Switches switches;
+  MachineLimits limits;  // kLimits
 };
 
 inline CycleCommand cycle_command(Command command, double value = 0) {

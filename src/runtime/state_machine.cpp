@@ -24,6 +24,8 @@ Transition from_idle(Command c) {
       return to(MachineState::kCheck);
     case Command::kResume:
       return refuse("nothing to resume: the machine is idle");
+    case Command::kLimits:
+      return to(MachineState::kIdle);
     default:  // hold, jog cancel, check off, reset, unlock: harmless, nothing happens
       return to(MachineState::kIdle);
   }
@@ -43,6 +45,8 @@ Transition from_run(Command c) {
       return refuse("a program is running: no homing");
     case Command::kCheckOn:
       return refuse("a program is running: check mode waits until it ends");
+    case Command::kLimits:
+      return refuse("a program is running: the machine's limits change when it is idle");
     default:  // reset (stops on the path, then Idle), start (already running), overrides
       return to(MachineState::kRun);
   }
@@ -58,6 +62,7 @@ Transition from_hold(Command c) {
     case Command::kJog:
     case Command::kHome:
     case Command::kCheckOn:
+    case Command::kLimits:
       return refuse("the program is held: resume it or reset first");
     default:  // reset (then Idle), hold, overrides, switches
       return to(MachineState::kHold);
@@ -94,6 +99,7 @@ Transition from_alarm(Command c) {
     case Command::kRapidOverride:
     case Command::kSwitches:
     case Command::kLoad:
+    case Command::kLimits:
       return to(MachineState::kAlarm);
     default:
       return refuse("alarm: clear it (unlock) first");
@@ -112,6 +118,7 @@ Transition from_check(Command c) {
     case Command::kFeedOverride:
     case Command::kRapidOverride:
     case Command::kSwitches:
+    case Command::kLimits:
       return to(MachineState::kCheck);
     default:
       return refuse("check mode: nothing moves; leave check mode first");
@@ -215,6 +222,8 @@ std::string_view command_name(Command command) {
       return "check-on";
     case Command::kCheckOff:
       return "check-off";
+    case Command::kLimits:
+      return "limits";
     case Command::kCount:
       break;
   }

@@ -46,6 +46,7 @@ enum class Command : std::uint8_t {
   kSwitches,
   kCheckOn,
   kCheckOff,
+  kLimits,  // the running machine's limits change (nothing may move)
   kCount,
 };
 

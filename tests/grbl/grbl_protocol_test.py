@@ -55,6 +55,17 @@ def test_settings(c, workdir):
           f"$$ maps $110/$120 to the machine (got {d.get('110')}, {d.get('120')})")
     check(d.get("130") == "600" and d.get("11") == "0.010", "$130 travel, $11 contour tolerance")
     expect_reply(c, "$110=5000", "ok")
+    # The write changes the running machine at once: a rapid along X runs at 5000 mm/min.
+    expect_reply(c, "G0 X100", "ok")
+    top = 0.0
+    rep = c.wait_state("Run")
+    end = time.time() + 10
+    while not rep.startswith("<Idle") and time.time() < end:
+        top = max(top, float(field(rep, "FS").split(",")[0]))
+        rep = c.status()
+    check(4900 < top <= 5000.5, f"after $110=5000 the X rapid runs at 5000 mm/min ({top})")
+    expect_reply(c, "G0 X0", "ok")
+    c.wait_state("Idle")
     expect_reply(c, "$100=80", "ok", "$100 steps/mm accepted")
     expect_reply(c, "$110=-1", "error:4")
     expect_reply(c, "$20=0", "error:3", "$20=0 (soft limits always on)")

@@ -181,6 +181,48 @@ TEST(Controller, AJogStopsAtTheTravelLimitAndACancelBrakesWithinTheAcceleration)
   EXPECT_LE(worst, sv.machine().max_accel_mm_s2 * 1.001);
 }
 
+// Limits changed while idle: the next jog and program run with them (speed and travel measured
+// from the set-points), bad values and changes while moving are refused.
+TEST(Controller, LimitsChangedWhileIdleRuleTheNextJogAndProgram) {
+  Served sv(default_machine_config());
+  MachineLimits l = sv.c().limits();
+  EXPECT_EQ(l.max_mm[kX], 300);
+  l.max_speed_mm_min[kX] = 1200;
+  l.max_mm[kX] = 40;
+  ASSERT_TRUE(sv.c().set_limits(l).ok);
+  EXPECT_EQ(sv.c().limits(), l);
+  EXPECT_EQ(sv.c().machine().axes[kX].max_mm, 300);  // the configuration as started
+  JogRequest j;
+  j.axes = 1U << kX;
+  j.target[kX] = 1;
+  j.continuous = true;
+  j.feed_mm_min = 9000;
+  ASSERT_TRUE(sv.c().jog(j).ok);
+  ASSERT_TRUE(sv.wait_state(MachineState::kIdle));
+  EXPECT_NEAR(sv.c().status().commanded[kX], 40, 1e-9);  // the new travel's end
+  const double tau = sv.machine().period_s;
+  const auto speed_max = [&](const std::vector<motion::Sample>& s) {
+    double v = 0;
+    for (std::size_t n = 1; n < s.size(); ++n) {
+      v = std::max(v, std::abs(s[n].position[kX] - s[n - 1].position[kX]) / tau * 60);
+    }
+    return v;
+  };
+  EXPECT_LE(speed_max(sv.samples()), 1200 * 1.001);
+  EXPECT_GT(speed_max(sv.samples()), 1100);
+  // A program beyond the new travel is refused at its line; within it, it keeps the new speed.
+  EXPECT_FALSE(sv.c().mdi("G0 X50").ok);
+  ASSERT_TRUE(sv.c().mdi("G1 X0 F6000").ok);
+  ASSERT_TRUE(sv.wait_state(MachineState::kRun, 5));  // 40 mm at 1200 mm/min: 2 s
+  EXPECT_FALSE(sv.c().set_limits(l).ok);
+  MachineLimits bad = l;
+  bad.min_mm[kX] = 50;
+  EXPECT_FALSE(sv.c().set_limits(bad).ok);
+  ASSERT_TRUE(sv.wait_state(MachineState::kIdle));
+  EXPECT_NEAR(sv.c().status().commanded[kX], 0, 1e-9);
+  EXPECT_LE(speed_max(sv.samples()), 1200 * 1.001);
+}
+
 TEST(Controller, HomingFindsTheSwitchesWhereverTheAxesReallyAre) {
   ControllerOptions o = Served::default_options();
   o.sim_position_error[kX] = 7;
