@@ -26,8 +26,9 @@
 //   - stops (exact stop, dwell, waiting event, the end): a sample lands exactly on the stop point
 //     with a step ≤ a, none passes it, and the plan waits there for resume();
 //   - the window's end while more may come: a wall no sample reaches.
-// The override (restart()), feed hold (brake_now()) and stops are handled here; the acc/dec type
-// "search" (search_accdec.hpp) wires them to the kernel. Not done: the filters (jerk stage, post
+// The override (restart()), feed hold (brake_now()), stops and a stop requested at a segment
+// end while the tool moves (stop_at()) are handled here; the acc/dec type "search"
+// (search_accdec.hpp) wires them to the kernel. Not done: the filters (jerk stage, post
 // filter), rotary-only segments, and a hand-back to the acceleration type at speed.
 #pragma once
 
