@@ -58,9 +58,9 @@
 //    following it asks for no more than a_s per cycle (3. (ii)), like the stop at the window's
 //    end. u is the last step plus 2·A0: the next cycle may rise by A0, and a centred corner
 //    committed in the last cycle (11.) may need a step up to A0 above the last one, which the
-//    new stop must not cut. stop_reach_mm() is the lowest c the first form allows (σ is
-//    monotone: mm_at_sigma(), O(log n)); can_stop_at() tests all three at a block end (the
-//    kernel tries the ends from there on, on the cycle of the request only).
+//    new stop must not cut. stop_reach_mm() is the first block end the first form allows (σ is
+//    monotone along the path: a bisection over the items); can_stop_at() tests all three at a
+//    block end (the kernel tries the ends from there on, on the cycle of the request only).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -203,12 +203,33 @@ double AccelLimitedAccDec::request_step() const {
 
 double AccelLimitedAccDec::stop_reach_mm() {
   const double u = request_step();
-  if (u <= 0 || !have_prev_) return pos_mm_;
+  if (u <= 0 || !have_prev_ || buf_.empty()) return pos_mm_;
   const double target = sigma_at(pos_mm_) + (u * u + u * a0_) / (2 * a0_);
   if (target >= sigma_total_) return prev_end_mm_;  // the window's end, a stop already
-  std::size_t slot = 0;
-  // (Hint: just before the last segment's end, so that the search starts in that segment.)
-  return std::max(pos_mm_, mm_at_sigma(target, std::nextafter(prev_end_mm_, 0.0), slot));
+  // The first item whose end has σ ≥ target (σ never falls along the path; events between the
+  // segments end where the segment before them does): galloping from the tool's item, then
+  // bisection, O(log n) probes of σ at an item's end (each O(log n)).
+  const std::uint64_t first = std::max(cur_, buf_.begin_index()), end = buf_.end_index();
+  if (first >= end) return pos_mm_;
+  auto reaches = [&](std::uint64_t k) { return sigma_at(buf_.end_mm_of(k)) >= target; };
+  std::uint64_t lo = first, hi = end - 1;  // the answer lies in [lo, hi]
+  if (!reaches(hi)) return prev_end_mm_;
+  for (std::uint64_t step = 1; lo + step < hi; step *= 2) {
+    if (reaches(lo + step)) {
+      hi = lo + step;
+      break;
+    }
+    lo += step;
+  }
+  while (lo < hi) {
+    const std::uint64_t mid = lo + (hi - lo) / 2;
+    if (reaches(mid)) {
+      hi = mid;
+    } else {
+      lo = mid + 1;
+    }
+  }
+  return buf_.end_mm_of(lo);
 }
 
 bool AccelLimitedAccDec::can_stop_at(double stop_mm) const {

@@ -24,7 +24,8 @@ constexpr double kPi = 3.14159265358979323846;
 
 // A zigzag along +X: blocks of 0.05–1.5 mm (one in ten 8 or 20 mm), each turned ±2°, 5°, 30° or
 // 60° off the X axis with alternating sign, so the corners run from 4° to 120° and X grows at
-// every vertex. Also the vertices and their path positions.
+// every vertex; after one block in five an event that does not wait (M8). Also the vertices
+// and their path positions.
 struct Zigzag {
   Prog p;
   std::vector<AxisVec> vertex;  // vertex[i]: end of block i
@@ -46,6 +47,7 @@ Zigzag zigzag(std::uint32_t seed, int blocks, double feed_mm_min) {
     s += len;
     z.vertex.push_back(z.p.pos);
     z.s_mm.push_back(s);
+    if (rng() % 5 == 0) z.p.aux('M', 8, false);  // an event that does not stop the tool
   }
   return z;
 }
