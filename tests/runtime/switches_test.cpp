@@ -31,8 +31,8 @@ TEST(Switches, SingleBlockOnWhileRunningStopsAtTheEndOfAProgrammedBlock) {
   std::string text = "G21 G90 G64\nG1 X0 Y0 F3000\n";
   for (int i = 1; i <= 120; ++i) text += fmt::format("G1 X{} Y{}\n", 2 * i, (i % 2) * 2);
   text += "M30\n";
-  // The switch acts from the next block the kernel takes in: a short look-ahead buffer makes
-  // that within this program.
+  // A short look-ahead buffer: most of the program reaches the kernel after the switch, with
+  // the single-block pauses after its blocks (the test below: with the whole buffer ahead).
   MachineConfig m = default_machine_config();
   m.lookahead_blocks = 16;
   Served sv(m);
