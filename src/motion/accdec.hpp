@@ -46,6 +46,19 @@ class AccDec {
   // One interpolation cycle. Real-time: no allocation, no I/O, bounded work.
   virtual void step(const CycleInput& in) = 0;
 
+  // A stop at a block end was asked for (Kernel::request_stop_at_block_end). Called between two
+  // cycles, on the cycle of the request only; the kernel tries the block ends from
+  // stop_reach_mm() on and takes the first that can_stop_at() accepts.
+  // The lowest path position the commanded motion can still stop at within the type's limits.
+  virtual double stop_reach_mm() = 0;
+  // Whether a stop at `stop_mm` (≥ stop_reach_mm()) keeps every limit of the type.
+  virtual bool can_stop_at(double /*stop_mm*/) const { return true; }
+  // From the next cycle on CycleInput::stop_mm is at most `stop_mm`: a type that plans ahead
+  // of the cycle plans again for it.
+  virtual void on_stop_request(double /*stop_mm*/) {}
+  // The requested stop is lifted (the tool rests on it, or has not got there yet).
+  virtual void on_stop_release() {}
+
   virtual double tool_mm() const = 0;        // the tool's path position (filtered)
   virtual double tool_speed_pc() const = 0;  // its step this cycle (mm/cycle)
   virtual double commanded_mm() const = 0;   // the commanded (pre-filter) path position

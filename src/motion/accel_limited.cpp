@@ -4,7 +4,8 @@
 // The derivation is split over the files that compute it:
 //   1.–5., 8.  below: caps, σ, the backward pass in closed form, the cycle, feed caps and the
 //              override, the jerk stage and the post filter;
-//   6.         accel_limited_late.cpp: blocks arriving while the tool brakes for the window's end;
+//   6., 14.    accel_limited_late.cpp: blocks arriving while the tool brakes for the window's end,
+//              a stop requested at a block end;
 //   7., 13.    accel_limited_zones.cpp: joint zones, sized when the joint arrives and again for the
 //              next joint's cap;
 //   9., 11., 12. accel_limited_corners.cpp: the cycle after a capped corner, centred corners, rises

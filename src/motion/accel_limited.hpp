@@ -57,6 +57,9 @@ class AccelLimitedAccDec final : public AccDec {
   void on_retire(std::uint64_t index) override;
   bool detach(std::uint64_t index) override;
   void step(const CycleInput& in) override;
+  // A stop requested at a block end (accel_limited_late.cpp, 14.).
+  double stop_reach_mm() override;
+  bool can_stop_at(double stop_mm) const override;
 
   // With a jerk stage (T2 > 1) the tool follows the commanded position through a moving
   // average of T2 cycles (8.); without one it is the commanded position.
@@ -375,6 +378,8 @@ class AccelLimitedAccDec final : public AccDec {
   // Holds a late block when the stop's landing bounds at stop_mm, with r_new over the block
   // (from at_mm), would fall below the last step (6.).
   void check_stop(double stop_mm, double at_mm, double r_new);
+  // The step a requested stop must leave room for (14.): the last one and two more A0.
+  double request_step() const;
   void start_hold(double at_mm);
   void release_hold();
 };

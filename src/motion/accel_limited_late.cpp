@@ -1,5 +1,6 @@
 // Blocks that arrive late, while the tool may already brake for the window's end: which caps
 // would bind at once, and the hold that lets the tool stop and settle before they take effect.
+// And the other stop that comes late: one requested at a block end ahead (14.).
 //
 // 6. Late caps. A block arrives *late* when the interpreter was late: until then the window's
 //    last end point was a stop, and the tool may already be braking for it. Its caps may then
@@ -45,6 +46,21 @@
 //    the curve fell by 1.41·A0 at once, 2 827 mm/s² tangential).
 //    The release inserts the pending caps kReleasePerCycle per cycle (O(log n) each) while the
 //    tool waits at rest, so no cycle does more than a bounded number of inserts.
+//
+// 14. A stop requested at a block end (Kernel::request_stop_at_block_end). CycleInput::stop_mm
+//    drops at once to a block end ahead, with every block after it already here: nothing is
+//    late, only the stop's own bounds (3.) are new. At the commanded position p with step u
+//    they allow u when
+//        lattice in σ:   (u + A0/2)² ≤ A0²/4 + 2·A0·(σ(c) − σ(p))  ⇔  u² + u·A0 ≤ 2·A0·Δσ,
+//        landing step:   landing_step(c − p, a_s) ≥ u,
+//        tail cap V_t:   √(a_s² + V_t² + 2·a_s·(c − p − V_t)) − a_s ≥ u  (c − p > V_t),
+//    a_s = A0 × the lowest r over [p, c), as the cycle takes it. From a bound ≥ the last step
+//    following it asks for no more than a_s per cycle (3. (ii)), like the stop at the window's
+//    end. u is the last step plus 2·A0: the next cycle may rise by A0, and a centred corner
+//    committed in the last cycle (11.) may need a step up to A0 above the last one, which the
+//    new stop must not cut. stop_reach_mm() is the first block end the first form allows (σ is
+//    monotone along the path: a bisection over the items); can_stop_at() tests all three at a
+//    block end (the kernel tries the ends from there on, on the cycle of the request only).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -178,6 +194,53 @@ void AccelLimitedAccDec::release_hold() {
     late_hold_ = false;
   }
   cached_stop_mm_ = -1;
+}
+
+double AccelLimitedAccDec::request_step() const {
+  // At rest (and nothing committed, 11.) any block end ahead will do.
+  return step_ > 0 || commit_.valid ? step_ + 2 * a0_ : 0.0;
+}
+
+double AccelLimitedAccDec::stop_reach_mm() {
+  const double u = request_step();
+  if (u <= 0 || !have_prev_ || buf_.empty()) return pos_mm_;
+  const double target = sigma_at(pos_mm_) + (u * u + u * a0_) / (2 * a0_);
+  if (target >= sigma_total_) return prev_end_mm_;  // the window's end, a stop already
+  // The first item whose end has σ ≥ target (σ never falls along the path; events between the
+  // segments end where the segment before them does): galloping from the tool's item, then
+  // bisection, O(log n) probes of σ at an item's end (each O(log n)).
+  const std::uint64_t first = std::max(cur_, buf_.begin_index()), end = buf_.end_index();
+  if (first >= end) return pos_mm_;
+  auto reaches = [&](std::uint64_t k) { return sigma_at(buf_.end_mm_of(k)) >= target; };
+  std::uint64_t lo = first, hi = end - 1;  // the answer lies in [lo, hi]
+  if (!reaches(hi)) return prev_end_mm_;
+  for (std::uint64_t step = 1; lo + step < hi; step *= 2) {
+    if (reaches(lo + step)) {
+      hi = lo + step;
+      break;
+    }
+    lo += step;
+  }
+  while (lo < hi) {
+    const std::uint64_t mid = lo + (hi - lo) / 2;
+    if (reaches(mid)) {
+      hi = mid;
+    } else {
+      lo = mid + 1;
+    }
+  }
+  return buf_.end_mm_of(lo);
+}
+
+bool AccelLimitedAccDec::can_stop_at(double stop_mm) const {
+  const double u = request_step();
+  const double d = stop_mm - pos_mm_;
+  if (u <= 0) return d >= 0;
+  if (2 * a0_ * (sigma_at(stop_mm) - sigma_at(pos_mm_)) < u * u + u * a0_) return false;
+  const double as = r_span(pos_mm_, std::nextafter(stop_mm, pos_mm_)) * a0_;
+  const double vt = tail_cap_pc_;
+  const double tail = d <= vt ? vt : std::sqrt(as * as + vt * vt + 2 * as * (d - vt)) - as;
+  return landing_step(d, as) >= u && tail >= u;
 }
 
 }  // namespace cncore::motion

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -237,7 +238,48 @@ struct Kernel::Impl {
   double stop_mm() const {
     double s = total_mm;  // the buffer's last end point (a stop until its successor comes)
     if (bq_size > 0) s = std::min(s, buf[barriers[bq_head]].s0_mm);
-    return s;
+    return std::min(s, block_stop_mm);
+  }
+
+  // Kernel::request_stop_at_block_end, taken at the start of the cycle after the request: the
+  // first motion block end e ahead of the tool at or after the acc/dec's stop reach that it
+  // accepts, or the stop already ahead when that comes first. Tries at most the buffer's items
+  // (its configured capacity), in this cycle only; mostly the first end it tries.
+  template <typename A>
+  void choose_block_stop(A& a) {
+    const double tool = a.tool_mm();
+    const double ahead = stop_mm();  // (block_stop_mm is +∞ here)
+    double chosen = ahead > tool ? ahead : kNoStop;
+    if (!buf.empty() && std::max(out_idx, buf.begin_index()) < buf.end_index()) {
+      const double reach = a.stop_reach_mm();
+      // The first item ending after max(tool, reach − ulp): its end is > tool and ≥ reach.
+      const double from = std::max(tool, std::nextafter(reach, -kNoStop));
+      for (std::uint64_t k = buf.seek(std::max(out_idx, buf.begin_index()), from);
+           k < buf.end_index(); ++k) {
+        const double e = buf.end_mm_of(k);
+        if (e >= chosen) break;
+        if (buf.is_motion(k) && e > tool && e >= reach && a.can_stop_at(e)) {
+          chosen = e;
+          break;
+        }
+      }
+    }
+    if (chosen == kNoStop) return;  // nothing ahead yet: tried again next cycle
+    stop_asked = false;
+    block_stop_mm = chosen;
+    a.on_stop_request(chosen);
+  }
+
+  bool stopped_at_block_end() const {
+    return block_stop_mm < kNoStop && acc.tool_mm() >= block_stop_mm && acc.at_rest() &&
+           post_settled();
+  }
+
+  void release_block_stop() {
+    stop_asked = false;
+    if (block_stop_mm == kNoStop) return;
+    block_stop_mm = kNoStop;
+    acc.on_stop_release();
   }
 
   bool post_settled() const { return !lim.post_filter() || post_still >= lim.post_cycles; }
@@ -418,6 +460,7 @@ struct Kernel::Impl {
       return true;
     }
     if (all_done_with(a)) return false;
+    if (stop_asked) choose_block_stop(a);
     ++cycle;
     CycleInput in;
     in.or_ratio = cycle_or_ratio();
@@ -471,6 +514,9 @@ struct Kernel::Impl {
   std::size_t ev_head = 0, ev_size = 0;
 
   bool ended = false, started = false, hold = false;
+  static constexpr double kNoStop = std::numeric_limits<double>::infinity();
+  bool stop_asked = false;         // request_stop_at_block_end, taken by the next step()
+  double block_stop_mm = kNoStop;  // the requested stop at a block end (+∞: none)
   double override_pct = 100;
   double or_ratio = 1;         // override_pct / 100 (set_override)
   double rapid_or_ratio = -1;  // rapids' own ratio (set_rapid_override); < 0: or_ratio
@@ -516,6 +562,15 @@ void Kernel::set_rapid_override(double pct) {
 }
 void Kernel::set_feed_hold(bool hold) {
   impl_->hold = hold;
+}
+void Kernel::request_stop_at_block_end() {
+  if (impl_->block_stop_mm == Impl::kNoStop) impl_->stop_asked = true;
+}
+bool Kernel::stopped_at_block_end() const {
+  return impl_->stopped_at_block_end();
+}
+void Kernel::release_stop_at_block_end() {
+  impl_->release_block_stop();
 }
 std::uint64_t Kernel::reference_mismatches() const {
   if (const auto* ma = dynamic_cast<const MovingAverageAccDec*>(&impl_->acc)) {

@@ -89,6 +89,23 @@ class Kernel {
   // Feed hold: decelerate along the path to a stop and wait; false resumes.
   void set_feed_hold(bool hold);
 
+  // Stop at a block end (single block switched on while the program runs): from the next
+  // cycle on, the first end of a motion block ahead of the tool at which it can still come to
+  // rest within the machine's limits (speed, acceleration, what the acc/dec type honours: the
+  // moving average's lag, the jerk stage, the post filter) is a stop, and the tool does not
+  // move past it until release_stop_at_block_end(). A stop already ahead (the end of what the
+  // kernel holds, a dwell, an event that waits) counts as one when it comes first. Only one at
+  // a time: a request while one stands is ignored. With no block end ahead yet (the buffer
+  // ends at the tool) the request waits for the next block.
+  // The cycle that takes the request does extra work bounded by the buffer's capacity (the
+  // block ends tried from the stopping distance on); the others one comparison more.
+  void request_stop_at_block_end();
+  // True while the tool rests (post filter settled) on the requested stop.
+  bool stopped_at_block_end() const;
+  // Lifts the requested stop, reached or not: the motion goes on (e.g. at cycle start). A new
+  // request from rest stops at the next block end.
+  void release_stop_at_block_end();
+
   // Diagnostics (tests, benchmarks).
   std::uint64_t reference_mismatches() const;  // see KernelOptions::check_reference_walk
   double filter_time_s() const;                // (T + T2 − 1)·τ: span of the acc/dec filter

@@ -57,6 +57,9 @@ class MovingAverageAccDec final : public AccDec {
   bool holds(std::uint64_t index) const override;
   void on_retire(std::uint64_t index) override;
   void step(const CycleInput& in) override;
+  // The filter brakes: the commanded position may stop at once, as it does at the buffer's end
+  // when the next block is late (a step that drops to 0 leaves the filter at ≤ Vb/T per cycle).
+  double stop_reach_mm() override { return cmd_mm_; }
 
   double tool_mm() const override { return tool_mm_; }
   double tool_speed_pc() const override { return tool_step_; }

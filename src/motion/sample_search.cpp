@@ -82,18 +82,9 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
   g.stop = true;
   g.hard_stop = false;
   g.turn_cos = 1;
-  if (idx > 0) {
-    Seg& prev = seg(idx - 1);
-    if (!prev.hard_stop) {
-      prev.joint_cap = m * corner_cap(prev.geo, g.geo);
-      const Vec3 e = prev.geo.end_direction().xyz(), s = g.geo.start_direction().xyz();
-      const double ne = norm(e), ns = norm(s);
-      prev.turn_cos = ne > 0 && ns > 0 ? dot(e, s) / (ne * ns) : 1.0;
-      prev.stop = false;
-    }
-  }
   const bool fresh = eff_fresh_ >= seg_end_;
   ++seg_end_;
+  if (idx > 0 && !seg(idx - 1).hard_stop) join(idx - 1);
   update_eff(idx);
   if (fresh) eff_fresh_ = seg_end_;
   if (stop_after) mark_stop();
@@ -107,6 +98,16 @@ bool SampleSearch::push(const planner::Segment& segment, bool stop_after) {
     emit(beam_[0], 0);
   }
   return true;
+}
+
+void SampleSearch::join(std::uint64_t j) {
+  Seg& a = seg(j);
+  const Seg& b = seg(j + 1);
+  a.joint_cap = opt_.limit_factor * corner_cap(a.geo, b.geo);
+  const Vec3 e = a.geo.end_direction().xyz(), s = b.geo.start_direction().xyz();
+  const double ne = norm(e), ns = norm(s);
+  a.turn_cos = ne > 0 && ns > 0 ? dot(e, s) / (ne * ns) : 1.0;
+  a.stop = false;
 }
 
 // The checker's speed limit of a segment's shape: the feed or rapid rate, and √(R·Amax) on an

@@ -26,8 +26,9 @@
 //   - stops (exact stop, dwell, waiting event, the end): a sample lands exactly on the stop point
 //     with a step ≤ a, none passes it, and the plan waits there for resume();
 //   - the window's end while more may come: a wall no sample reaches.
-// The override (restart()), feed hold (brake_now()) and stops are handled here; the acc/dec type
-// "search" (search_accdec.hpp) wires them to the kernel. Not done: the filters (jerk stage, post
+// The override (restart()), feed hold (brake_now()), stops and a stop requested at a segment
+// end while the tool moves (stop_at()) are handled here; the acc/dec type "search"
+// (search_accdec.hpp) wires them to the kernel. Not done: the filters (jerk stage, post
 // filter), rotary-only segments, and a hand-back to the acceleration type at speed.
 #pragma once
 
@@ -89,6 +90,18 @@ class SampleSearch {
   // At rest on a stop (at_stop()): plan on from there.
   void resume();
   bool at_stop() const { return at_stop_ || stop_at_start_; }
+
+  // A stop requested at a segment end while the tool moves (the kernel's
+  // request_stop_at_block_end). Bounded by the configuration: one brake of at most the output
+  // reserve's cycles, or one pass over the stops ahead.
+  // Where the greedy brake from the newest popped sample (the tool's) comes to rest.
+  double brake_rest_mm();
+  // The segment ending at s_mm (ahead of the tool, before every stop ahead but those at the
+  // tool) ends in a stop: what was planned after the newest popped sample is planned again.
+  // False when no segment ends there or it is a stop already.
+  bool stop_at(double s_mm);
+  // The stop of stop_at() is lifted: where the tool has not reached it, the plan goes on past it.
+  void lift_stop();
 
   // From the newest popped sample, plan again with the feed override `ratio` (1 = 100 %): the
   // samples committed and not popped are dropped. After a decrease the old override stands for
@@ -166,6 +179,8 @@ class SampleSearch {
   void reached_terminal();
   void restart_at_rest();
   double shape_cap(const planner::Segment& s) const;
+  // Segment j is followed by segment j + 1 without a stop: its joint's cap and turn.
+  void join(std::uint64_t j);
   double corner_cap(const planner::Segment& a, const planner::Segment& b) const;
   double eff_of(std::uint64_t j) const;
   void update_eff(std::uint64_t last);
@@ -238,7 +253,9 @@ class SampleSearch {
   bool stop_at_start_ = false;         // a stop (dwell, event) came before the first segment
   std::vector<std::uint64_t> hard_q_;  // segments ending in a stop, ahead of the tool
   std::size_t hard_head_ = 0, hard_n_ = 0;
-  double or_ = 1;  // planned override
+  static constexpr std::uint64_t kNoSegment = ~std::uint64_t{0};
+  std::uint64_t asked_ = kNoSegment;  // the segment stop_at() made end in a stop
+  double or_ = 1;                     // planned override
   // Overrides replaced by a decrease, each standing until its cycle (the checker's ramp).
   struct Allowance {
     double ratio;

@@ -260,6 +260,66 @@ void SampleSearch::resume() {
   restart_at_rest();
 }
 
+double SampleSearch::brake_rest_mm() {
+  if (seg_end_ == 0) return popped_s_;
+  Node n{popped_sp_, popped_s_, seg_of(popped_s_, last_commit_.seg), -1};
+  const std::uint64_t c = popped_n_ > 0 ? popped_n_ - 1 : 0;
+  const double end = terminal();
+  for (std::size_t k = 1; k < out_reserve_ && n.s > n.sp; ++k) {
+    ratio_ = ratio_at(c + k);
+    Cand best{};
+    if (!smallest_step(n, best)) {
+      // (Cannot happen: pop() certified the tool's sample by this very brake.) The tangential
+      // braking distance from the last step, and that step again.
+      const double d = n.s - n.sp;
+      return n.s + brake_distance(d, 0) + d + a_;
+    }
+    const double d2 = best.s2 - n.s;
+    n = Node{n.s, best.s2, best.seg2, -1};
+    if (n.s == end && d2 <= a_) break;
+  }
+  return n.s;
+}
+
+bool SampleSearch::stop_at(double s_mm) {
+  if (seg_end_ == 0 || s_mm <= popped_s_ || hard_n_ == hard_q_.size()) return false;
+  const std::uint64_t j = seg_of(std::nextafter(s_mm, 0.0), last_commit_.seg);
+  Seg& g = seg(j);
+  if (g.hard_stop || std::abs(joint_s(j) - s_mm) > kRound) return false;
+  // In path order: after the stops at the tool (resume() drops them), before those ahead.
+  const std::size_t n = hard_q_.size();
+  hard_head_ = (hard_head_ + n - 1) % n;
+  std::size_t i = 0;
+  for (; i < hard_n_ && hard_q_[(hard_head_ + i + 1) % n] < j; ++i) {
+    hard_q_[(hard_head_ + i) % n] = hard_q_[(hard_head_ + i + 1) % n];
+  }
+  hard_q_[(hard_head_ + i) % n] = j;
+  ++hard_n_;
+  g.hard_stop = true;
+  g.stop = true;
+  asked_ = j;
+  // Planned again from the tool's sample, the effective caps made current ahead of the front
+  // (restart() → refresh_eff()): the guide brakes for the new stop.
+  restart(or_, 0);
+  return true;
+}
+
+void SampleSearch::lift_stop() {
+  const std::uint64_t j = asked_;
+  asked_ = kNoSegment;
+  // Reached (the tool rests on it): resume() drops it from the stops.
+  if (j == kNoSegment || j < seg_base_ || j >= seg_end_ || joint_s(j) <= popped_s_) return;
+  const std::size_t n = hard_q_.size();
+  std::size_t i = 0;
+  while (i < hard_n_ && hard_q_[(hard_head_ + i) % n] != j) ++i;
+  if (i == hard_n_) return;
+  for (; i + 1 < hard_n_; ++i) hard_q_[(hard_head_ + i) % n] = hard_q_[(hard_head_ + i + 1) % n];
+  --hard_n_;
+  seg(j).hard_stop = false;
+  if (j + 1 < seg_end_) join(j);  // else it stays the window's end
+  restart(or_, 0);
+}
+
 double SampleSearch::ratio_at(std::uint64_t cycle) const {
   double r = or_;
   for (std::size_t i = 0; i < allow_n_; ++i)

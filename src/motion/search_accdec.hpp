@@ -33,6 +33,10 @@ class SearchAccDec final : public AccDec {
   void on_retire(std::uint64_t /*index*/) override {}
 
   void step(const CycleInput& in) override;
+  // A stop requested at a block end: beyond the greedy brake's rest (SampleSearch).
+  double stop_reach_mm() override { return search_.brake_rest_mm(); }
+  void on_stop_request(double stop_mm) override { search_.stop_at(stop_mm); }
+  void on_stop_release() override { search_.lift_stop(); }
 
   double tool_mm() const override { return tool_mm_; }
   double tool_speed_pc() const override { return step_pc_; }

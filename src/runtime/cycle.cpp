@@ -81,7 +81,13 @@ void CycleLoop::apply(const CycleCommand& c, std::uint64_t n) {
       }
       break;
     case Command::kResume:
-      if (job_ != nullptr) job_->kernel.set_feed_hold(false);
+      if (job_ != nullptr) {
+        job_->kernel.set_feed_hold(false);
+        // Single block: one more block. The blocks the kernel took before the switch went on
+        // have no program stop after them: the kernel stops at the next block end instead.
+        job_->kernel.release_stop_at_block_end();
+        if (status_.switches.single_block) job_->kernel.request_stop_at_block_end();
+      }
       paused_by_program_ = false;
       status_.state = MachineState::kRun;
       status_.hold_complete = false;
@@ -115,6 +121,16 @@ void CycleLoop::apply(const CycleCommand& c, std::uint64_t n) {
       if (job_ != nullptr) job_->kernel.set_rapid_override(c.value);
       break;
     case Command::kSwitches:
+      if (job_ != nullptr && c.switches.single_block != status_.switches.single_block) {
+        // On: the blocks the kernel holds already (up to the whole look-ahead buffer) came
+        // without a program stop after them, so the kernel stops at the first block end it can
+        // still stop at. Off: that stop is lifted (a cycle start still ends a pause there).
+        if (c.switches.single_block) {
+          job_->kernel.request_stop_at_block_end();
+        } else {
+          job_->kernel.release_stop_at_block_end();
+        }
+      }
       status_.switches = c.switches;
       break;
     case Command::kCheckOn:
@@ -259,9 +275,10 @@ void CycleLoop::program_cycle(motion::Sample& s) {
   note_aux(s);
   const bool single_block_pause = s.aux_value == 0 && s.aux_p == kSingleBlockPause;
   const bool pause =
-      s.aux_letter == 'M' &&
-      ((s.aux_value == 0 && (!single_block_pause || status_.switches.single_block)) ||
-       (s.aux_value == 1 && status_.switches.optional_stop));
+      (s.aux_letter == 'M' &&
+       ((s.aux_value == 0 && (!single_block_pause || status_.switches.single_block)) ||
+        (s.aux_value == 1 && status_.switches.optional_stop))) ||
+      (status_.switches.single_block && j.kernel.stopped_at_block_end());
   if (pause && status_.state == MachineState::kRun) {
     j.kernel.set_feed_hold(true);
     status_.state = MachineState::kHold;

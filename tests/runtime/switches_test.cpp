@@ -31,8 +31,8 @@ TEST(Switches, SingleBlockOnWhileRunningStopsAtTheEndOfAProgrammedBlock) {
   std::string text = "G21 G90 G64\nG1 X0 Y0 F3000\n";
   for (int i = 1; i <= 120; ++i) text += fmt::format("G1 X{} Y{}\n", 2 * i, (i % 2) * 2);
   text += "M30\n";
-  // The switch acts from the next block the kernel takes in: a short look-ahead buffer makes
-  // that within this program.
+  // A short look-ahead buffer: most of the program reaches the kernel after the switch, with
+  // the single-block pauses after its blocks (the test below: with the whole buffer ahead).
   MachineConfig m = default_machine_config();
   m.lookahead_blocks = 16;
   Served sv(m);
@@ -70,6 +70,52 @@ TEST(Switches, SingleBlockOnWhileRunningStopsAtTheEndOfAProgrammedBlock) {
     }
   }
   EXPECT_TRUE(rested);
+}
+
+TEST(Switches, SingleBlockOnWithTheWholeBufferAheadStopsWithinTheBlocksBrakingNeeds) {
+  // 12 000 blocks of a zigzag (vertex i at X = 2·i), more than the default 10 000-block
+  // look-ahead buffer, which is full when the switch goes on: every block it holds came without
+  // a program stop after it, so the kernel itself stops at the first block end it can reach.
+  // At F6000 the tool slows to the 90° corners at every vertex, so braking takes at most the
+  // rest of one block: it stops at the end of the block under it or of the next one.
+  std::string text = "G21 G90 G64\nG1 X0 Y0 F6000\n";
+  for (int i = 1; i <= 12000; ++i) text += fmt::format("G1 X{} Y{}\n", 2 * i, (i % 2) * 2);
+  text += "M30\n";
+  MachineConfig m = default_machine_config();
+  ASSERT_EQ(m.lookahead_blocks, 10000U);
+  m.axes[kX].max_mm = 25000;  // the zigzag's 24 m
+  Served sv(m);
+  ASSERT_TRUE(sv.c().load_program(write_program("zigzag-12k.ngc", text)).ok);
+  ASSERT_TRUE(sv.c().cycle_start().ok);
+  sv.wait_cycles(300);
+  ASSERT_EQ(sv.c().status().state, MachineState::kRun);
+  ASSERT_TRUE(sv.c().set_switches(Switches{false, true}).ok);
+  ASSERT_TRUE(sv.wait_for(stopped, 10));
+  const AxisVec p = sv.c().status().commanded;
+  const double k = std::round(p[kX] / 2);
+  EXPECT_NEAR(p[kX], 2 * k, 1e-9);
+  EXPECT_NEAR(p[kY], std::fmod(k, 2) * 2, 1e-9);
+  // Where the tool was in the first cycle with the switch on (the samples are by cycle).
+  std::uint64_t on_cycle = 0;
+  for (const AppliedCommand& a : sv.applied()) {
+    if (a.command == Command::kSwitches) on_cycle = a.cycle;
+  }
+  const auto s = sv.samples();
+  ASSERT_GT(on_cycle, 0U);
+  ASSERT_LT(on_cycle, s.size());
+  const double block_at_switch = std::floor(s[on_cycle].position[kX] / 2) + 1;  // its end vertex
+  EXPECT_GE(k, block_at_switch);
+  EXPECT_LE(k, block_at_switch + 1) << "switched on at X " << s[on_cycle].position[kX];
+  // Cycle start runs one more block (its blocks had no program stop either).
+  ASSERT_TRUE(sv.c().cycle_start().ok);
+  ASSERT_TRUE(sv.wait_for([](const Status& st) { return st.state == MachineState::kRun; }));
+  ASSERT_TRUE(sv.wait_for(stopped, 10));
+  EXPECT_NEAR(sv.c().status().commanded[kX], 2 * k + 2, 1e-9);
+  // Off again: the tool runs on past the next vertex without stopping there.
+  ASSERT_TRUE(sv.c().set_switches(Switches{false, false}).ok);
+  ASSERT_TRUE(sv.c().cycle_start().ok);
+  ASSERT_TRUE(sv.wait_for([&](const Status& st) { return st.commanded[kX] > 2 * k + 10; }, 10));
+  EXPECT_EQ(sv.c().status().state, MachineState::kRun);
 }
 
 TEST(Switches, BlockDeleteOffRunsSlashLinesAndTheProgramIsCheckedAgainAtCycleStart) {
