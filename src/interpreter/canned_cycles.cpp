@@ -138,6 +138,12 @@ void Interpreter::Impl::canned_cycle(std::uint32_t col) {
   }
 
   const double unit = modal_.length_unit_mm();
+  const bool turned = rotation_deg(modal_.coord_system) != 0;
+  if (turned && modal_.plane != Plane::kXY) {
+    fail(col, fmt::format("{} in {} in a rotated coordinate system (G10 L2 R): only G17 cycles "
+                          "turn with the rotation",
+                          g, plane_gcode(modal_.plane)));
+  }
   double old_cc = pos_[n];
   const double r_mm =
       modal_.absolute ? modal_.cycle_r * unit + offset(n) : old_cc + modal_.cycle_r * unit;
@@ -157,9 +163,20 @@ void Interpreter::Impl::canned_cycle(std::uint32_t col) {
   for (std::uint64_t k = 0; k < repeats; ++k) {
     if (k > 0) spend(ctx_.line, col);
     AxisVec hole = pos_;
+    if (turned) {
+      // The hole in the rotated program frame (G17: X and Y turn together).
+      AxisVec p = to_program(pos_, tool_offset_);
+      for (const std::size_t a : {pa.first, pa.second}) {
+        const auto& v = w[kAxisWords[a]];
+        if (v.present) p[a] = modal_.absolute ? v.value * unit : p[a] + v.value * unit;
+      }
+      const AxisVec m = from_program(p);
+      hole[pa.first] = m[pa.first];
+      hole[pa.second] = m[pa.second];
+    }
     for (const std::size_t a : {pa.first, pa.second}) {
       const auto& v = w[kAxisWords[a]];
-      if (!v.present) continue;
+      if (!v.present || turned) continue;
       hole[a] = modal_.absolute ? v.value * unit + offset(a) : pos_[a] + v.value * unit;
     }
     hole[n] = old_cc;

@@ -1,8 +1,11 @@
 // LinuxCNC's canonical-machine calls for blocks (`cncore check --canon`), so that a listing
-// compares line by line with `rs274 -g`: positions in program units with the tool length
-// offset taken off (LinuxCNC applies it below the canonical interface), 4 decimals, arcs in
-// their plane's axis order.
+// compares line by line with `rs274 -g`: positions in program coordinates and units (LinuxCNC
+// applies the work and G92 offsets, the rotation and the tool length offset below the
+// canonical interface), 4 decimals, arcs in their plane's axis order.
 #include <fmt/format.h>
+
+#include <cmath>
+#include <numbers>
 
 #include "interpreter/interpreter.hpp"
 
@@ -16,13 +19,28 @@ std::string num(double v) {
   return s;
 }
 
+// program = R(−θ)·(machine − tool − work) − g92, in program units (rotary axes in degrees).
+AxisVec to_program(const AxisVec& m, const CanonFrame& f) {
+  AxisVec p;
+  for (std::size_t a = 0; a < kMaxAxes; ++a)
+    p[a] = m[a] - f.tool_offset_mm[a] - f.work_offset_mm[a];
+  if (f.rotation_deg != 0) {
+    const double rad = -f.rotation_deg * std::numbers::pi / 180.0;
+    const double x = p[0], y = p[1];
+    p[0] = x * std::cos(rad) - y * std::sin(rad);
+    p[1] = x * std::sin(rad) + y * std::cos(rad);
+  }
+  for (std::size_t a = 0; a < kMaxAxes; ++a) {
+    p[a] -= f.g92_offset_mm[a];
+    if (a < 3) p[a] /= f.unit_mm;
+  }
+  return p;
+}
+
 }  // namespace
 
 std::string CanonPrinter::print(const Block& b, const CanonFrame& f) {
-  auto at = [&](const AxisVec& p, std::size_t a) {
-    const double v = p[a] - f.tool_offset_mm[a];
-    return a < 3 ? v / f.unit_mm : v;
-  };
+  auto at = [&](const AxisVec& p, std::size_t a) { return to_program(p, f)[a]; };
   auto axes = [&](const AxisVec& p) {
     return fmt::format("{}, {}, {}, {}, {}, {}", num(at(p, 0)), num(at(p, 1)), num(at(p, 2)),
                        num(at(p, 3)), num(at(p, 4)), num(at(p, 5)));

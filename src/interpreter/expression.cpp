@@ -170,6 +170,7 @@ ParamRef Evaluator::param_ref(std::size_t& pos) {
 
 double Evaluator::read(const ParamRef& ref) const {
   if (ref.number > 0) return params_.numbered(ref.number);
+  if (double live = 0; params_.read_live_named(ref.name, live)) return live;
   const double* v = params_.find_named(ref.name);
   if (v == nullptr) {
     ctx_.fail(ref.col, "undefined parameter #<" + printable(ref.name) + ">");

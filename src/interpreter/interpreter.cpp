@@ -45,6 +45,8 @@ Interpreter::Impl::Impl(LineReader r, std::string name, MachineConfig m, const O
   }
   init_tools(options);
   block_delete_ = options.block_delete;
+  on_message_ = options.on_message;
+  zero_length_moves_ = options.zero_length_moves;
   out_.reserve(8);
   words_.assignments.reserve(8);
 }
@@ -77,16 +79,6 @@ bool Interpreter::Impl::recover() {
   return !finished_;
 }
 
-bool Interpreter::Impl::read_live(int number, double& value) const {
-  if (number >= kParamPosition && number < kParamPosition + static_cast<int>(kMaxAxes)) {
-    const auto axis = static_cast<std::size_t>(number - kParamPosition);
-    const double unit = is_rotary(axis) ? 1.0 : modal_.length_unit_mm();
-    value = (pos_[axis] - offset(axis)) / unit;
-    return true;
-  }
-  return read_tool_param(number, value);
-}
-
 // ---------------------------------------------------------------------------------------------
 // Reading one line
 
@@ -109,6 +101,7 @@ void Interpreter::Impl::step() {
     }
     return;
   }
+  if (line_.message != NormLine::Message::kNone) show_message();
   if (line_.text.empty()) return;
 
   std::size_t pos = 0;
@@ -634,7 +627,7 @@ bool Interpreter::beyond_travel() const {
 }
 
 CanonFrame Interpreter::canon_frame() const {
-  return {impl_->modal_.length_unit_mm(), impl_->tool_offset_};
+  return impl_->canon_frame();
 }
 
 }  // namespace cncore::interp

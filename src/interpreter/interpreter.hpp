@@ -29,13 +29,23 @@ struct Options {
   std::optional<bool> tools_listed;
   // The operator's block delete switch: on, lines starting with "/" are skipped; off, they run.
   bool block_delete = true;
+  // Operator messages, "(msg,…)" and "(debug,…)" comments (LinuxCNC's MESSAGE), as their lines
+  // run; none: they are ignored.
+  std::function<void(const std::string& text)> on_message;
+  // Emit G0/G1 moves that go nowhere (LinuxCNC's canonical listing has them; the planner
+  // needs none).
+  bool zero_length_moves = false;
 };
 
-// What LinuxCNC's canonical positions leave out of a block's machine coordinates: the program
-// units and the tool length offset in force when the block was made.
+// What turns a block's machine coordinates into LinuxCNC's canonical (program) positions: the
+// program units and the frame in force when the block was made,
+//   program = R(−θ)·(machine − tool − work) − g92   (R turns X and Y).
 struct CanonFrame {
   double unit_mm = 1;  // 25.4 in G20
   AxisVec tool_offset_mm;
+  AxisVec work_offset_mm;   // the active system's (G54…G59.3)
+  AxisVec g92_offset_mm;    // G92 / G52 while applied
+  double rotation_deg = 0;  // the active system's XY rotation (G10 L2 R)
 };
 
 class Interpreter {

@@ -31,13 +31,6 @@ inline constexpr double kArcRelTol = 0.001;
 // R-form: half-chord may exceed |R| by this much (LinuxCNC TOLERANCE_MM / TOLERANCE_INCH).
 inline constexpr double kRadiusTolMm = 0.005;
 inline constexpr double kRadiusTolInch = 0.0005;
-// An I J K arc whose end radius differs from its start radius by more than kSpiralMinMm is a
-// spiral (arc_spiral), made of arcs whose radii change by at most kSpiralPieceMm each. Below
-// it (4-decimal rounding of inch CAM output stays under 0.004 mm), one arc with the centre
-// moved onto the chord's bisector, within half of kSpiralMinMm of the spiral.
-inline constexpr double kSpiralMinMm = 0.005;
-inline constexpr double kSpiralPieceMm = 0.001;
-
 inline constexpr std::array<char, kMaxAxes> kAxisWords = {'x', 'y', 'z', 'a', 'b', 'c'};
 
 inline bool is_rotary(std::size_t axis) {
@@ -53,6 +46,10 @@ inline constexpr int kParamCoordSystem = 5220;
 inline constexpr int kParamWorkOffsets = 5221;  // + 20·(system − 1) + axis
 inline constexpr int kParamTool = 5400;
 inline constexpr int kParamPosition = 5420;
+inline constexpr int kParamMachinePosition = 5021;  // current machine position X…C
+// The XY rotation (G10 L2 R, degrees) of a system is its tenth number, after X Y Z A B C U V W:
+// work_param(system, kRotationSlot), #5230 for G54.
+inline constexpr std::size_t kRotationSlot = 9;
 
 inline int work_param(int system, std::size_t axis) {
   return kParamWorkOffsets + 20 * (system - 1) + static_cast<int>(axis);
@@ -195,18 +192,32 @@ struct Interpreter::Impl final : LiveParameters {
   void line_motion(const AxisVec& target, std::uint32_t col);  // G0 / G1
   void arc(const AxisVec& target, bool ccw, std::uint32_t col);
   void emit_arc(const AxisVec& target, Vec2 c, bool ccw, std::uint32_t turns, std::uint32_t col);
-  void arc_spiral(const AxisVec& target, Vec2 c, bool ccw, std::uint32_t turns, std::uint32_t col);
+  void check_arc_travel(const AxisVec& target, Vec2 c, double dr, bool ccw, std::uint32_t turns,
+                        std::uint32_t col);
   void emit_motion(BlockKind kind, const AxisVec& target, std::uint32_t col);
   // The move to `target` sweeps lo … hi: an error if that leaves the travel (not while the
   // program continues beyond it after such an error, see recover()).
   void check_travel(const AxisVec& lo, const AxisVec& hi, const AxisVec& target, std::uint32_t col);
-  void set_offsets();        // G10, G92 family
-  void go_home(int code10);  // G28 / G30 (and .1)
+  void set_offsets();                          // G10, G92 family
+  void set_work_offset(int system, bool l20);  // G10 L2 / L20
+  void go_home(int code10);                    // G28 / G30 (and .1)
+  double offset(std::size_t axis) const;       // work + G92 offset of the active system (mm)
+
+  // frame.cpp: machine = R(θ)·(program + g92) + work + tool
   AxisVec target_from_words(bool machine_coords) const;
-  double offset(std::size_t axis) const;  // work + G92 offset of the active system (mm)
+  double rotation_deg(int system) const;  // G10 L2 R of a system
+  static Vec2 rotated(Vec2 v, double deg);
+  AxisVec g92_offset() const;  // the G92/G52 offset while applied, else zero (mm)
+  // The program position of machine position `m` with the tool offset `tool`, and back (with
+  // the active tool offset).
+  AxisVec to_program(const AxisVec& m, const AxisVec& tool) const;
+  AxisVec from_program(const AxisVec& p) const;
+  bool read_live_named(std::string_view name, double& value) const override;
+  CanonFrame canon_frame() const;
   Block base_block(BlockKind kind) const;
   void emit_aux(char letter, double value, bool waits);
   bool read_live(int number, double& value) const override;
+  void show_message();  // the line's (msg,…) / (debug,…) comment (messages.cpp)
   // A "/" line while the block delete switch is on.
   bool skipped() const { return line_.block_delete && block_delete_; }
   [[noreturn]] void fail(std::uint32_t col, const std::string& message) const {
@@ -254,6 +265,8 @@ struct Interpreter::Impl final : LiveParameters {
   std::string file_;
   MachineConfig machine_;
   bool block_delete_ = true;
+  std::function<void(const std::string&)> on_message_;
+  bool zero_length_moves_ = false;
   LineReader reader_;
   NormLine line_;
   ErrorContext ctx_;

@@ -27,9 +27,37 @@ std::string printable(std::string_view text) {
   return out;
 }
 
+namespace {
+
+// "msg," / "debug," (any case, blanks before them) opening a comment: keep its text.
+void message_comment(std::string_view c, NormLine& out) {
+  std::size_t k = 0;
+  while (k < c.size() && (c[k] == ' ' || c[k] == '\t')) ++k;
+  auto opens = [&](std::string_view key) {
+    if (c.size() - k < key.size()) return false;
+    for (std::size_t j = 0; j < key.size(); ++j) {
+      const char ch = c[k + j];
+      if ((ch >= 'A' && ch <= 'Z' ? static_cast<char>(ch - 'A' + 'a') : ch) != key[j]) {
+        return false;
+      }
+    }
+    return true;
+  };
+  if (opens("msg,")) {
+    out.message = NormLine::Message::kMsg;
+    out.message_text = c.substr(k + 4);
+  } else if (opens("debug,")) {
+    out.message = NormLine::Message::kDebug;
+    out.message_text = c.substr(k + 6);
+  }
+}
+
+}  // namespace
+
 void normalize_line(std::string_view raw, NormLine& out, const ErrorContext& ctx) {
   out.block_delete = false;
   out.percent = false;
+  out.message = NormLine::Message::kNone;
   // Hot path: write through raw pointers into buffers sized for the whole line, then trim.
   const std::size_t n = raw.size();
   out.text.resize(n);
@@ -59,6 +87,7 @@ void normalize_line(std::string_view raw, NormLine& out, const ErrorContext& ctx
       if (i >= n) {
         ctx.fail(static_cast<std::uint32_t>(open + 1), "unclosed comment: '(' without ')'");
       }
+      message_comment(raw.substr(open + 1, i - open - 1), out);
       continue;
     }
     if (c == ')') ctx.fail(static_cast<std::uint32_t>(i + 1), "')' without '(' (comment)");

@@ -23,6 +23,11 @@ struct NormLine {
   std::vector<std::uint32_t> cols;  // cols[i]: original column of text[i]; one extra = end
   bool block_delete = false;        // the line starts with "/"
   bool percent = false;             // the line is a "%" program delimiter
+  // A "(msg,TEXT)" or "(debug,TEXT)" comment (LinuxCNC's operator messages): its TEXT, as
+  // written; the last one of the line.
+  enum class Message : std::uint8_t { kNone, kMsg, kDebug };
+  Message message = Message::kNone;
+  std::string message_text;
 
   std::uint32_t col(std::size_t i) const {
     return i < cols.size() ? cols[i] : (cols.empty() ? 1 : cols.back());

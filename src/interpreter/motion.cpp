@@ -4,30 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
 #include "core/error.hpp"
 #include "interpreter/interpreter_impl.hpp"
 
 namespace cncore::interp {
-
-AxisVec Interpreter::Impl::target_from_words(bool machine_coords) const {
-  AxisVec target = pos_;
-  const double unit = modal_.length_unit_mm();
-  for (std::size_t a = 0; a < kMaxAxes; ++a) {
-    const auto& v = words_[kAxisWords[a]];
-    if (!v.present) continue;
-    const double value = v.value * (is_rotary(a) ? 1.0 : unit);
-    if (machine_coords) {
-      target[a] = value + tool_offset_[a];  // G53: machine coordinates; the tool offset stays
-    } else if (modal_.absolute) {
-      target[a] = value + offset(a);  // G90: program coordinate + work offset (+ G92)
-    } else {
-      target[a] = pos_[a] + value;  // G91
-    }
-  }
-  return target;
-}
 
 void Interpreter::Impl::check_travel(const AxisVec& lo, const AxisVec& hi, const AxisVec& target,
                                      std::uint32_t col) {
@@ -87,7 +68,7 @@ void Interpreter::Impl::line_motion(const AxisVec& target, std::uint32_t col) {
   }
   check_travel(target, target, target, col);
   const double len2 = linear2 + rotary2;
-  if (len2 > kZeroMoveMm * kZeroMoveMm) {
+  if (len2 > kZeroMoveMm * kZeroMoveMm || zero_length_moves_) {
     emit_motion(rapid ? BlockKind::kRapid : BlockKind::kLine, target, col);
   }
   pos_ = target;
@@ -104,12 +85,16 @@ void Interpreter::Impl::arc(const AxisVec& target, bool ccw, std::uint32_t col) 
   const Vec2 s{pos_[pa.first], pos_[pa.second]};
   const Vec2 e{target[pa.first], target[pa.second]};
   Vec2 c;
-  Vec2 programmed;  // the I J K centre as written (check_centre moves c onto the bisector)
-  bool spiral = false;
+  double dr = 0;  // r1 − r0: an I J K arc whose radii differ within the tolerance is a spiral
   if (w.has(pa.normal_word)) {
     const char up = static_cast<char>(pa.normal_word - 'a' + 'A');
     fail(w[pa.normal_word].col,
          fmt::format("{} word given for an arc in the {} plane", up, plane_gcode(modal_.plane)));
+  }
+  if (modal_.plane != Plane::kXY && rotation_deg(modal_.coord_system) != 0) {
+    fail(col, fmt::format("{} arc in a rotated coordinate system (G10 L2 R): only G17 arcs turn "
+                          "with the rotation",
+                          g));
   }
   const bool has_first = w.has(pa.first_word), has_second = w.has(pa.second_word);
   if (w.has('r')) {
@@ -124,18 +109,26 @@ void Interpreter::Impl::arc(const AxisVec& target, bool ccw, std::uint32_t col) 
     const double i = w[pa.first_word].value * unit;  // absent words are 0
     const double j = w[pa.second_word].value * unit;
     if (modal_.arc_absolute) {
-      c = {i + offset(pa.first), j + offset(pa.second)};  // G90.1: program coordinates
+      // G90.1: program coordinates
+      AxisVec pc = to_program(pos_, tool_offset_);
+      pc[pa.first] = i;
+      pc[pa.second] = j;
+      const AxisVec mc = from_program(pc);
+      c = {mc[pa.first], mc[pa.second]};
     } else {
-      c = {s.a + i, s.b + j};  // G91.1: relative to the start point
+      // G91.1: relative to the start point, along the program's (rotated) axes
+      const Vec2 d = rotated({i, j}, rotation_deg(modal_.coord_system));
+      c = {s.a + d.a, s.b + d.b};
     }
     const double abs_tol = modal_.inch ? kArcAbsTolInch * 25.4 : kArcAbsTolMm;
-    programmed = c;
-    const double dr =
-        std::hypot(e.a - c.a, e.b - c.b) - std::hypot(s.a - c.a, s.b - c.b);  // r1 − r0
-    spiral = std::fabs(dr) > kSpiralMinMm;
-    const ArcCheck chk = check_centre(s, e, c, abs_tol, kArcRelTol);
+    const double r0 = std::hypot(s.a - c.a, s.b - c.b), r1 = std::hypot(e.a - c.a, e.b - c.b);
+    dr = r1 - r0;
+    // check_centre would move the centre onto the chord's bisector; like LinuxCNC, the
+    // programmed centre stays and the radius blends from r0 to r1 along the sweep (the
+    // planner's arcs take r linear in the angle).
+    Vec2 moved = c;
+    const ArcCheck chk = check_centre(s, e, moved, abs_tol, kArcRelTol);
     if (!chk.ok) {
-      const double r0 = std::hypot(s.a - c.a, s.b - c.b), r1 = std::hypot(e.a - c.a, e.b - c.b);
       fail(col,
            fmt::format("{} ({:.4f} mm at the start, {:.4f} mm at the end)", chk.message, r0, r1));
     }
@@ -148,49 +141,21 @@ void Interpreter::Impl::arc(const AxisVec& target, bool ccw, std::uint32_t col) 
     }
     turns = static_cast<std::uint32_t>(p) - 1;
   }
-  // Travel: the end point, plus the axis-aligned extremes of the circle that the arc passes.
-  // When the whole circle (c ± r) lies inside the travel, the extremes need not be computed.
-  AxisVec lo = target, hi = target;
-  for (std::size_t a = 0; a < kMaxAxes; ++a) {
-    lo[a] = std::min(pos_[a], target[a]);
-    hi[a] = std::max(pos_[a], target[a]);
-  }
-  // (A spiral's radius differs from this one by at most the radius tolerance.)
-  const double r = std::sqrt((s.a - c.a) * (s.a - c.a) + (s.b - c.b) * (s.b - c.b)) +
-                   (spiral ? std::fabs(std::hypot(e.a - programmed.a, e.b - programmed.b) -
-                                       std::hypot(s.a - programmed.a, s.b - programmed.b))
-                           : 0.0);
-  const AxisConfig& fa = machine_.axes[pa.first];
-  const AxisConfig& sa = machine_.axes[pa.second];
-  const bool circle_inside =
-      c.a - r >= fa.min_mm && c.a + r <= fa.max_mm && c.b - r >= sa.min_mm && c.b + r <= sa.max_mm;
-  if (!circle_inside) {
-    const double sweep = arc_sweep(s, e, c, ccw, turns);
-    Vec2 lo2, hi2;
-    arc_bounds(s, e, c, sweep, lo2, hi2);
-    lo[pa.first] = lo2.a;
-    lo[pa.second] = lo2.b;
-    hi[pa.first] = hi2.a;
-    hi[pa.second] = hi2.b;
-  }
-  check_travel(lo, hi, target, col);
+  check_arc_travel(target, c, dr, ccw, turns, col);
   // G93's length: the arc's (the radius at the start, or a spiral's mean) with the helix rise.
   const double sweep_rad = arc_sweep(s, e, c, ccw, turns);
   const double rise_mm = target[pa.normal] - pos_[pa.normal];
   const double mean_r = 0.5 * (std::hypot(s.a - c.a, s.b - c.b) + std::hypot(e.a - c.a, e.b - c.b));
   move_feed_mm_min_ = move_feed_mm_min(std::hypot(mean_r * sweep_rad, rise_mm), col);
 
-  if (spiral) {
-    arc_spiral(target, programmed, ccw, turns, col);
-  } else {
-    emit_arc(target, c, ccw, turns, col);
-  }
+  emit_arc(target, c, ccw, turns, col);
   pos_ = target;
 }
 
-// G10 L2 / L20 (work offsets), G92, G92.1, G92.2, G92.3.
-
-// One arc block from pos_ to `target` about `c` (plane coordinates; equal radii at both ends).
+// One arc block from pos_ to `target` about `c` (plane coordinates): a circular arc, or a
+// spiral when the radii at the two ends differ,
+//   p(t) = c + (r0 + (r1 − r0)·t)·(cos(θ0 + φ·t), sin(θ0 + φ·t)),  t ∈ [0, 1],
+// with the helix axis and the other axes linear in t (src/planner/segment.cpp).
 void Interpreter::Impl::emit_arc(const AxisVec& target, Vec2 c, bool ccw, std::uint32_t turns,
                                  std::uint32_t col) {
   const PlaneAxes pa = plane_axes(modal_.plane);
@@ -213,43 +178,43 @@ void Interpreter::Impl::emit_arc(const AxisVec& target, Vec2 c, bool ccw, std::u
   out_.push_back(b);
 }
 
-// An I J K arc whose end radius r1 differs from its start radius r0 (within the tolerance):
-// like LinuxCNC, the programmed centre c stays and the radius blends along the sweep φ,
-//   p(t) = c + (r0 + (r1 − r0)·t)·(cos(θ0 + φ·t), sin(θ0 + φ·t)),  t ∈ [0, 1],
-// with the helix axis and other axes linear in t. The planner takes circular arcs, so the
-// spiral goes as n arcs through the points p(k/n), each with its radius change of at most
-// kSpiralPieceMm (each arc then stays within about that of the spiral), and at most a quarter
-// turn each.
-void Interpreter::Impl::arc_spiral(const AxisVec& target, Vec2 c, bool ccw, std::uint32_t turns,
-                                   std::uint32_t col) {
+// Travel of an arc from pos_ to `target` about `c` (plane coordinates) whose end radius is
+// the start's + dr: the end point, plus the axis-aligned extremes of the circle that the arc
+// passes. When the whole circle (c ± r) lies inside the travel, the extremes need not be
+// computed.
+void Interpreter::Impl::check_arc_travel(const AxisVec& target, Vec2 c, double dr, bool ccw,
+                                         std::uint32_t turns, std::uint32_t col) {
   const PlaneAxes pa = plane_axes(modal_.plane);
-  const AxisVec start = pos_;
-  const Vec2 s{start[pa.first], start[pa.second]};
+  const Vec2 s{pos_[pa.first], pos_[pa.second]};
   const Vec2 e{target[pa.first], target[pa.second]};
-  const double r0 = std::hypot(s.a - c.a, s.b - c.b);
-  const double r1 = std::hypot(e.a - c.a, e.b - c.b);
-  const double theta0 = std::atan2(s.b - c.b, s.a - c.a);
-  const double sweep = arc_sweep(s, e, c, ccw, turns);  // signed, CCW positive
-  const double by_radius = std::ceil(std::fabs(r1 - r0) / kSpiralPieceMm);
-  const double by_angle = std::ceil(std::fabs(sweep) / (std::numbers::pi / 2));
-  const auto n = static_cast<int>(std::clamp(std::max(by_radius, by_angle), 2.0, 4096.0));
-  for (int k = 1; k <= n; ++k) {
-    const double t = static_cast<double>(k) / n;
-    AxisVec p = target;
-    if (k < n) {
-      for (std::size_t a = 0; a < kMaxAxes; ++a) p[a] = start[a] + (target[a] - start[a]) * t;
-      const double r = r0 + (r1 - r0) * t;
-      const double theta = theta0 + sweep * t;
-      p[pa.first] = c.a + r * std::cos(theta);
-      p[pa.second] = c.b + r * std::sin(theta);
-    }
-    // The piece's own centre: c moved onto the bisector of its chord (its radii differ by
-    // (r1 − r0)/n at most, far inside any tolerance).
-    Vec2 pc = c;
-    check_centre({pos_[pa.first], pos_[pa.second]}, {p[pa.first], p[pa.second]}, pc, 1e9, 1.0);
-    emit_arc(p, pc, ccw, 0, col);
-    pos_ = p;
+  AxisVec lo = target, hi = target;
+  for (std::size_t a = 0; a < kMaxAxes; ++a) {
+    lo[a] = std::min(pos_[a], target[a]);
+    hi[a] = std::max(pos_[a], target[a]);
   }
+  // (A spiral's radius differs from the start's by at most |r1 − r0|.)
+  const double r = std::hypot(s.a - c.a, s.b - c.b) + std::fabs(dr);
+  const AxisConfig& fa = machine_.axes[pa.first];
+  const AxisConfig& sa = machine_.axes[pa.second];
+  const bool circle_inside =
+      c.a - r >= fa.min_mm && c.a + r <= fa.max_mm && c.b - r >= sa.min_mm && c.b + r <= sa.max_mm;
+  if (!circle_inside) {
+    const double sweep = arc_sweep(s, e, c, ccw, turns);
+    Vec2 lo2, hi2;
+    arc_bounds(s, e, c, sweep, lo2, hi2);
+    // An extreme inside the sweep (not an end point) of a spiral: within |r1 − r0| of the
+    // circle's.
+    const double wa = std::fabs(dr);
+    if (lo2.a < std::min(s.a, e.a)) lo2.a -= wa;
+    if (lo2.b < std::min(s.b, e.b)) lo2.b -= wa;
+    if (hi2.a > std::max(s.a, e.a)) hi2.a += wa;
+    if (hi2.b > std::max(s.b, e.b)) hi2.b += wa;
+    lo[pa.first] = lo2.a;
+    lo[pa.second] = lo2.b;
+    hi[pa.first] = hi2.a;
+    hi[pa.second] = hi2.b;
+  }
+  check_travel(lo, hi, target, col);
 }
 
 double Interpreter::Impl::move_feed_mm_min(double length_mm, std::uint32_t col) const {

@@ -31,26 +31,10 @@ void Interpreter::Impl::set_offsets() {
         break;
       }
       if (l != 2 && l != 20) fail(w['l'].col, fmt::format("G10 L{}: unknown G10 form", l));
-      if (w.has('r')) fail(w['r'].col, "G10 R: coordinate system rotation is not supported");
       if (!w.has('p')) fail(g->col, "G10 L2/L20 without P (coordinate system 0…9)");
       const double p = w['p'].value;
       if (p < 0 || p > 9 || p != std::floor(p)) fail(w['p'].col, "G10 P must be 0…9");
-      const int system = p == 0 ? modal_.coord_system : static_cast<int>(p);
-      for (std::size_t a = 0; a < kMaxAxes; ++a) {
-        if (!w[kAxisWords[a]].present) continue;
-        double value;
-        if (l == 2) {
-          value = scaled(a);  // L2: the offset itself (G90/G91 do not apply)
-        } else {
-          // L20: choose the offset so that the current position reads `value`:
-          // pos = value + work + g92 + tool  →  work = pos − g92 − tool − value
-          const double g92 = params_.numbered(kParamG92Applied) != 0
-                                 ? params_.numbered(kParamG92 + static_cast<int>(a))
-                                 : 0.0;
-          value = pos_[a] - g92 - tool_offset_[a] - scaled(a);
-        }
-        params_.set_numbered(work_param(system, a), value);
-      }
+      set_work_offset(p == 0 ? modal_.coord_system : static_cast<int>(p), l == 20);
       break;
     }
     case 520:
@@ -64,14 +48,14 @@ void Interpreter::Impl::set_offsets() {
       break;
     case 920: {
       bool any = false;
-      // G92: pos = value + work + g92 + tool  →  g92 = pos − work − tool − value, for the
-      // named axes.
+      // G92: the offset that makes the current position read the words, for the named axes:
+      // m = R(θ)·(value + g92) + work + tool  →  g92 = R(−θ)·(m − work − tool) − value.
+      params_.set_numbered(kParamG92Applied, 0);
+      const AxisVec unshifted = to_program(pos_, tool_offset_);
       for (std::size_t a = 0; a < kMaxAxes; ++a) {
         if (!w[kAxisWords[a]].present) continue;
         any = true;
-        const double work = params_.numbered(work_param(modal_.coord_system, a));
-        params_.set_numbered(kParamG92 + static_cast<int>(a),
-                             pos_[a] - work - tool_offset_[a] - scaled(a));
+        params_.set_numbered(kParamG92 + static_cast<int>(a), unshifted[a] - scaled(a));
       }
       if (!any) fail(g->col, "G92 without axis words");
       params_.set_numbered(kParamG92Applied, 1);
@@ -90,6 +74,40 @@ void Interpreter::Impl::set_offsets() {
       break;
     default:
       break;
+  }
+}
+
+// G10 L2 (the offset itself) or L20 (the offset that makes the current position read the
+// words) of `system`, with R its XY rotation (degrees). L20 keeps the current reading of the
+// axes it does not name: m = R(θ)·(p + g92) + work + tool  →  work = m − tool − R(θ)·(p + g92).
+void Interpreter::Impl::set_work_offset(int system, bool l20) {
+  const Words& w = words_;
+  const double unit = modal_.length_unit_mm();
+  auto scaled = [&](std::size_t a) { return w[kAxisWords[a]].value * (is_rotary(a) ? 1.0 : unit); };
+  if (!l20) {
+    for (std::size_t a = 0; a < kMaxAxes; ++a) {
+      if (w[kAxisWords[a]].present) params_.set_numbered(work_param(system, a), scaled(a));
+    }
+    if (w.has('r')) params_.set_numbered(work_param(system, kRotationSlot), w['r'].value);
+    return;
+  }
+  // The reading in the active frame, the named axes replaced, placed in `system`'s frame.
+  AxisVec p = to_program(pos_, tool_offset_);
+  bool any = false;
+  for (std::size_t a = 0; a < kMaxAxes; ++a) {
+    if (!w[kAxisWords[a]].present) continue;
+    p[a] = scaled(a);
+    any = true;
+  }
+  if (w.has('r')) params_.set_numbered(work_param(system, kRotationSlot), w['r'].value);
+  if (!any) return;
+  const AxisVec g92 = g92_offset();
+  const Vec2 xy = rotated({p[0] + g92[0], p[1] + g92[1]}, rotation_deg(system));
+  for (std::size_t a = 0; a < kMaxAxes; ++a) {
+    const double q = a == 0 ? xy.a : a == 1 ? xy.b : p[a] + g92[a];
+    const bool turned = a < 2 && (w.has('x') || w.has('y')) && rotation_deg(system) != 0;
+    if (w[kAxisWords[a]].present || turned)
+      params_.set_numbered(work_param(system, a), pos_[a] - tool_offset_[a] - q);
   }
 }
 

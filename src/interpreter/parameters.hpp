@@ -6,6 +6,8 @@
 //   #5221+20·(n−1)+a  work offset of system n, axis a (X Y Z A B C)
 //   #5161…#5166  G28 home, #5181…#5186 G30 home  (machine coordinates)
 //   #5400 tool in the spindle, #5420…#5425 current position (program coordinates)
+//   #5021…#5026  current position in machine coordinates (without the tool offset)
+//   #5230+20·(n−1)  XY rotation of system n (degrees)
 #pragma once
 
 #include <array>
@@ -28,6 +30,8 @@ class LiveParameters {
  public:
   virtual ~LiveParameters() = default;
   virtual bool read_live(int number, double& value) const = 0;
+  // Named system parameters (#<_x>, #<_abs_x>…); names are lower case.
+  virtual bool read_live_named(std::string_view /*name*/, double& /*value*/) const { return false; }
 };
 
 class Parameters {
@@ -47,6 +51,10 @@ class Parameters {
 
   // A leading '_' names a global; otherwise the parameter is local to the current call.
   const double* find_named(std::string_view name) const;
+  // A computed named parameter (#<_x>…): true and its value, or false.
+  bool read_live_named(std::string_view name, double& value) const {
+    return live_ != nullptr && name.starts_with('_') && live_->read_live_named(name, value);
+  }
   void set_named(std::string_view name, double value);
 
   // A subroutine call opens a new scope: fresh #1…#30 (the arguments) and fresh named locals.

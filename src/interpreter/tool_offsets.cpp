@@ -110,8 +110,8 @@ void Interpreter::Impl::tool_length(const Words::Code& g) {
 }
 
 // G10 L1 P<tool> [R<radius>] <axes>: the offsets themselves. G10 L10: the offsets that make the
-// current position read the given coordinates (with the active work and G92 offsets);
-// G10 L11: the same with G59.3's offset and no G92. Lengths in program units.
+// current position read the given coordinates (with the active work offset, rotation and G92);
+// G10 L11: the same with G59.3's offset and rotation and no G92. Lengths in program units.
 void Interpreter::Impl::set_tool_data(int l) {
   const Words& w = words_;
   const Words::Code* g = w.group(GGroup::kNonModal);
@@ -123,20 +123,39 @@ void Interpreter::Impl::set_tool_data(int l) {
     if (w['r'].value < 0) fail(w['r'].col, "G10 R: negative tool radius");
     e.diameter_mm = 2 * w['r'].value * unit;
   }
-  for (std::size_t a = 0; a < kMaxAxes; ++a) {
-    const auto& v = w[kAxisWords[a]];
-    if (!v.present) continue;
-    const double value = v.value * (is_rotary(a) ? 1.0 : unit);
-    if (l == 1) {
-      e.offset_mm[a] = value;
-    } else {
-      // pos = value + work + g92 + tool  →  tool = pos − work − g92 − value
-      const int system = l == 10 ? modal_.coord_system : 9;
-      double work = params_.stored(work_param(system, a));
-      if (l == 10 && params_.stored(kParamG92Applied) != 0) {
-        work += params_.stored(kParamG92 + static_cast<int>(a));
+  if (l == 1) {
+    for (std::size_t a = 0; a < kMaxAxes; ++a) {
+      const auto& v = w[kAxisWords[a]];
+      if (v.present) e.offset_mm[a] = v.value * (is_rotary(a) ? 1.0 : unit);
+    }
+  } else {
+    // The position as it reads with this tool's stored offset, the named axes replaced; then
+    // the offset that puts that reading here: m = R(θ)·(p + g92) + work + tool.
+    const int system = l == 10 ? modal_.coord_system : 9;
+    const double deg = rotation_deg(system);
+    AxisVec work, g92{};
+    for (std::size_t a = 0; a < kMaxAxes; ++a) work[a] = params_.stored(work_param(system, a));
+    if (l == 10) g92 = g92_offset();
+    AxisVec p;
+    for (std::size_t a = 0; a < kMaxAxes; ++a) p[a] = pos_[a] - work[a] - found.offset_mm[a];
+    const Vec2 xy = rotated({p[0], p[1]}, -deg);
+    p[0] = xy.a;
+    p[1] = xy.b;
+    bool named_xy = false;
+    for (std::size_t a = 0; a < kMaxAxes; ++a) {
+      const auto& v = w[kAxisWords[a]];
+      if (v.present) {
+        p[a] = v.value * (is_rotary(a) ? 1.0 : unit);
+        named_xy = named_xy || a < 2;
+      } else {
+        p[a] -= g92[a];
       }
-      e.offset_mm[a] = pos_[a] - work - value;
+    }
+    const Vec2 at = rotated({p[0] + g92[0], p[1] + g92[1]}, deg);
+    for (std::size_t a = 0; a < kMaxAxes; ++a) {
+      const double q = a == 0 ? at.a : a == 1 ? at.b : p[a] + g92[a];
+      if (w[kAxisWords[a]].present || (a < 2 && named_xy && deg != 0))
+        e.offset_mm[a] = pos_[a] - work[a] - q;
     }
   }
   tools_[e.number] = e;

@@ -48,9 +48,9 @@ const CorpusCase kCorpus[] = {
     {"linuxcnc-tp/Cereal.ngc", nullptr, 2200},
     {"linuxcnc-tp/arc_time.ngc", nullptr, 8},
     {"linuxcnc-tp/circle_small_segments_ncd.ngc", nullptr, 9990},
-    {"linuxcnc-tp/full_xy.ngc", "G10 R: coordinate system rotation is not supported", 0},
-    {"linuxcnc-tp/full_xz.ngc", "G10 R: coordinate system rotation is not supported", 0},
-    {"linuxcnc-tp/full_yz.ngc", "G10 R: coordinate system rotation is not supported", 0},
+    {"linuxcnc-tp/full_xy.ngc", nullptr, 6},  // G10 L2 R60: a rotated G54
+    {"linuxcnc-tp/full_xz.ngc", "only G17 arcs turn with the rotation", 0},
+    {"linuxcnc-tp/full_yz.ngc", "only G17 arcs turn with the rotation", 0},
     {"linuxcnc-tp/line-contouring-xz.ngc", nullptr, 1390},
     {"linuxcnc-tp/short_segments_0.001.ngc", nullptr, 2990},
     {"linuxcnc-tp/tight-corner-tolerance.ngc", nullptr, 220},

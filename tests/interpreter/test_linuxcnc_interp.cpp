@@ -1,9 +1,10 @@
 // LinuxCNC's own interpreter tests (../shared/testdata/linuxcnc-interp, CNCORE_SHARED_DIR) as
 // the oracle: every case is run through the interpreter and its motion (STRAIGHT_TRAVERSE,
 // STRAIGHT_FEED, ARC_FEED of the canonical listing, CanonPrinter) must match `expected` within
-// 1e-4 program units; a case that LinuxCNC rejects must fail with an InputError. Cases that
-// need an INI file, Python or a plug-in are out of scope. The counts are printed; the cases
-// listed in linuxcnc_interp_passing.txt must keep passing (the list grows as features land).
+// 1e-4 program units, and its operator messages (MESSAGE: (msg,…) and (debug,…) comments with
+// the parameters' values) word for word; a case that LinuxCNC rejects must fail with an InputError.
+// Cases that need an INI file, Python or a plug-in are out of scope. The counts are printed; the
+// cases listed in linuxcnc_interp_passing.txt must keep passing (the list grows as features land).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -31,7 +32,16 @@ struct Case {
   fs::path expected;
   bool must_fail = false;
   bool in_scope = true;
+  bool messages_only = false;     // test.sh keeps only the MESSAGE lines of the listing
+  bool no_negative_zero = false;  // test.sh writes -0.0000… as 0.0000…
 };
+
+std::string collapse_blanks(const std::string& s) {
+  std::istringstream in(s);
+  std::string word, out;
+  while (in >> word) out += (out.empty() ? "" : " ") + word;
+  return out;
+}
 
 std::vector<std::vector<double>> motion_lines(const std::string& text) {
   static const std::regex kCall(R"((STRAIGHT_TRAVERSE|STRAIGHT_FEED|ARC_FEED)\(([^)]*)\))");
@@ -50,6 +60,18 @@ std::vector<std::vector<double>> motion_lines(const std::string& text) {
   return out;
 }
 
+// The MESSAGE texts of a canonical listing, blanks collapsed (the cases' test.sh pipe the
+// listing through awk, which does the same).
+std::vector<std::string> message_lines(const std::string& text) {
+  static const std::regex kMessage(R"re(MESSAGE\("(.*)"\))re");
+  std::vector<std::string> out;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), kMessage);
+       it != std::sregex_iterator(); ++it) {
+    out.push_back(collapse_blanks((*it)[1].str()));
+  }
+  return out;
+}
+
 // The rs274 invocations of a test.sh: "rs274 … -g PROGRAM … [-t TABLE]".
 Case read_case(const fs::path& dir, const fs::path& root) {
   Case c;
@@ -58,6 +80,8 @@ Case read_case(const fs::path& dir, const fs::path& root) {
   c.expected = dir / "expected";
   const std::string sh = read_text((dir / "test.sh").string());
   c.must_fail = sh.find("! rs274") != std::string::npos;
+  c.messages_only = sh.find("awk '/MESSAGE/") != std::string::npos;
+  c.no_negative_zero = sh.find("s/-0\\.0000/0.0000/g") != std::string::npos;
   if (sh.find("g++") != std::string::npos) c.in_scope = false;  // builds a program on rs274
   std::istringstream lines(sh);
   std::string line;
@@ -129,6 +153,8 @@ std::string run_case(const Case& c) {
     for (const Run& r : c.runs) {
       Options o;
       if (!r.tool_table.empty()) o.tools = read_tool_table((c.dir / r.tool_table).string());
+      o.zero_length_moves = true;
+      o.on_message = [&](const std::string& text) { canon += "MESSAGE(\"" + text + "\")\n"; };
       Interpreter in((c.dir / r.program).string(), m, o);
       CanonPrinter p;
       Block b;
@@ -141,7 +167,7 @@ std::string run_case(const Case& c) {
   if (c.must_fail) return "accepted a program that LinuxCNC rejects";
   if (!fs::exists(c.expected)) return "no expected output";
   const auto want = motion_lines(read_text(c.expected.string()));
-  const auto got = motion_lines(canon);
+  const auto got = c.messages_only ? want : motion_lines(canon);
   for (std::size_t i = 0; i < std::min(want.size(), got.size()); ++i) {
     bool same = want[i].size() == got[i].size();
     for (std::size_t k = 0; same && k < want[i].size(); ++k) {
@@ -151,6 +177,23 @@ std::string run_case(const Case& c) {
   }
   if (want.size() != got.size()) {
     return std::to_string(got.size()) + " motions, LinuxCNC " + std::to_string(want.size());
+  }
+  const auto want_msg = message_lines(read_text(c.expected.string()));
+  auto got_msg = message_lines(canon);
+  for (std::string& text : got_msg) {
+    for (std::size_t at = 0;
+         c.no_negative_zero && (at = text.find("-0.0000", at)) != std::string::npos;)
+      text.erase(at, 1);
+  }
+  for (std::size_t i = 0; i < std::min(want_msg.size(), got_msg.size()); ++i) {
+    if (want_msg[i] != got_msg[i]) {
+      return "message " + std::to_string(i + 1) + " \"" + got_msg[i] + "\", LinuxCNC \"" +
+             want_msg[i] + "\"";
+    }
+  }
+  if (want_msg.size() != got_msg.size()) {
+    return std::to_string(got_msg.size()) + " messages, LinuxCNC " +
+           std::to_string(want_msg.size());
   }
   return {};
 }

@@ -186,7 +186,9 @@ RC_GTEST_PROP(InterpreterProperties, RandomValidProgramsGiveConsistentBlocks, ()
       const double r0 = plane_radius(b, b.start.xyz());
       const double r1 = plane_radius(b, b.end.xyz());
       RC_ASSERT(r0 > 0);
-      RC_ASSERT(std::fabs(r1 - r0) <= 1e-9 * r0);
+      // The words are written rounded: an I J K arc keeps its programmed centre (a spiral,
+      // as in LinuxCNC), so its radii differ by that rounding only.
+      RC_ASSERT(std::fabs(r1 - r0) <= 5e-3);
       // The centre lies in the plane of the start point.
       RC_ASSERT(std::fabs(dot(b.start.xyz() - b.center, b.normal)) < 1e-12);
     } else {
