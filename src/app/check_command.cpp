@@ -14,13 +14,18 @@ namespace cncore::app {
 
 int command_check(const CheckArgs& a) {
   const MachineConfig machine = machine_from(a.machine);
-  const interp::Options options = interpreter_options(a.vars, a.params, a.tool_table);
+  interp::Options options = interpreter_options(a.vars, a.params, a.tool_table);
+  std::string out;
+  if (a.canon) {
+    // As LinuxCNC's listing: moves that go nowhere and the operator messages, in program order.
+    options.zero_length_moves = true;
+    options.on_message = [&out](const std::string& text) { out += "MESSAGE(\"" + text + "\")\n"; };
+  }
   require_readable(a.program);
   interp::Interpreter interpreter(a.program, machine, options);
   Block b;
   interp::CanonPrinter canon;
   std::uint64_t blocks = 0, motion = 0;
-  std::string out;
   auto flush = [&out] {
     std::fwrite(out.data(), 1, out.size(), stdout);
     out.clear();
