@@ -5,6 +5,8 @@
 #include <limits>
 #include <thread>
 
+#include "runtime/cutting.hpp"
+
 namespace cncore::runtime {
 
 namespace {
@@ -394,6 +396,7 @@ void CycleLoop::raise_alarm(AlarmCode alarm, std::uint32_t line) {
 }
 
 void CycleLoop::finish_outputs(std::uint64_t n, motion::Sample& s) {
+  if (links_.cutting != nullptr) links_.cutting->on_cycle(n, s, status_);
   const double fe = sim_.step(status_.commanded);
   status_.following_error_mm = fe;
   status_.actual = sim_.actual();
