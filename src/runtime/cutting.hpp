@@ -54,6 +54,7 @@ class CuttingThread {
   // Any thread.
   void request_fresh_stock() { fresh_requested_.store(true, std::memory_order_release); }
   std::shared_ptr<const HeightMapGrid> heightmap() const;
+  double load_pct() const { return load_pct_.load(std::memory_order_relaxed); }
   std::uint64_t version() const { return version_.load(std::memory_order_acquire); }
   // Cycles the simulation has taken so far (waits in tests).
   std::uint64_t cycles_done() const { return cycles_done_.load(std::memory_order_acquire); }

@@ -18,6 +18,7 @@
 namespace cncore::runtime {
 
 class CuttingThread;
+class AdaptiveFeed;
 
 struct CycleLinks {
   SpscRing<CycleCommand>* commands = nullptr;   // control → cycle
@@ -27,6 +28,7 @@ struct CycleLinks {
   ServoOutput* output = nullptr;     // may be null (sim only)
   bool lossless_samples = false;     // ControllerOptions::lossless_samples
   CuttingThread* cutting = nullptr;  // the cutting simulation (a machine with [stock])
+  AdaptiveFeed* adaptive = nullptr;  // adaptive feed control on its load
 };
 
 class CycleLoop {
