@@ -69,7 +69,7 @@ runtime::ControllerOptions controller_options(const ServeArgs& a) {
 class TrajectoryRecorder {
  public:
   TrajectoryRecorder(runtime::Controller& c, const std::string& path)
-      : controller_(c), writer_(path, c.machine(), io::TrajectoryColumns{true}) {
+      : controller_(c), writer_(path, c.machine(), columns(c.machine())) {
     thread_ = std::thread([this] { run(); });
   }
   ~TrajectoryRecorder() {
@@ -86,6 +86,13 @@ class TrajectoryRecorder {
   }
 
  private:
+  // The override; the spindle load when the machine has a cutting simulation ([stock]).
+  static io::TrajectoryColumns columns(const MachineConfig& m) {
+    io::TrajectoryColumns cols;
+    cols.override_pct = true;
+    cols.load = m.cutting.stock.enabled;
+    return cols;
+  }
   void drain() {
     while (true) {
       const std::size_t n = controller_.read_samples(batch_);

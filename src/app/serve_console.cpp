@@ -112,6 +112,9 @@ std::string status_json(const runtime::Status& s, const MachineConfig& machine) 
   j["overruns"] = s.overruns;
   j["starved_cycles"] = s.starved_cycles;
   j["cycle_work_max_us"] = s.cycle_work_max_us;
+  j["load_pct"] = s.load_pct;
+  j["cutting_lag_cycles"] = s.cutting_lag_cycles;
+  j["cutting_coalesced"] = s.cutting_coalesced;
   nlohmann::json mpos = nlohmann::json::object();
   nlohmann::json wco = nlohmann::json::object();
   for (std::size_t a = 0; a < kMaxAxes; ++a) {
@@ -140,6 +143,7 @@ std::string console_command(runtime::Controller& c, const std::string& line, boo
   }
   if (cmd == "start" || cmd == "resume") return reply(c.cycle_start());
   if (cmd == "hold") return reply(c.feed_hold());
+  if (cmd == "reset" && w.size() == 2 && w[1] == "stock") return reply(c.reset_stock());
   if (cmd == "reset") return reply(c.reset());
   if (cmd == "estop") return reply(c.estop());
   if (cmd == "unlock") return reply(c.clear_alarm());

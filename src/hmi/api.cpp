@@ -1,6 +1,7 @@
 #include "hmi/api.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <nlohmann/json.hpp>
 
 #include "hmi/program_view.hpp"
@@ -118,6 +119,8 @@ std::string status_event_json(const runtime::Status& s, const MachineConfig& mac
                    {"single_block", s.switches.single_block},
                    {"block_delete", s.switches.block_delete}};
   j["overruns"] = s.overruns;
+  j["cutting_lag_cycles"] = s.cutting_lag_cycles;
+  j["cutting_coalesced"] = s.cutting_coalesced;
   return j.dump();
 }
 
@@ -139,8 +142,26 @@ std::string machine_json(const MachineConfig& machine) {
          {"max_feed_mm_min", machine.max_feed_mm_min},
          {"rapid_mm_min", machine.rapid_mm_min},
          {"max_override_pct", machine.max_override_pct},
+         {"load_target_pct", machine.adaptive.target_load_pct},
          {"jog_feed_mm_min", machine.servo.jog_feed_mm_min}};
   return j.dump();
+}
+
+std::string heightmap_binary(const runtime::HeightMapGrid& g) {
+  // "CNCZMAP1", u32 nx, u32 ny, f64 x0, y0, cell, then the float32 heights (little-endian, as
+  // the machines this runs on store them): 40 bytes of header keep the heights 4-byte aligned.
+  std::string out("CNCZMAP1");
+  auto put = [&out](const auto& v) {
+    out.append(reinterpret_cast<const char*>(&v), sizeof v);  // NOLINT: bytes of a number
+  };
+  put(static_cast<std::uint32_t>(g.nx));
+  put(static_cast<std::uint32_t>(g.ny));
+  put(g.x0_mm);
+  put(g.y0_mm);
+  put(g.cell_mm);
+  out.append(reinterpret_cast<const char*>(g.heights_mm.data()),  // NOLINT: bytes of floats
+             g.heights_mm.size() * sizeof(float));
+  return out;
 }
 
 Reply control(runtime::Controller& c, std::string_view name, const std::string& body) {
@@ -157,6 +178,7 @@ Reply control(runtime::Controller& c, std::string_view name, const std::string& 
   if (name == "override") return overrides(c, j);
   if (name == "switches") return switches(c, j);
   if (name == "check") return reply_of(c.set_check_mode(j.value("on", false)));
+  if (name == "reset-stock") return reply_of(c.reset_stock());
   if (name == "mdi") {
     const std::string line = j.value("line", "");
     if (line.empty()) return bad_request("mdi: no line");

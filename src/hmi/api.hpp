@@ -20,13 +20,18 @@ std::string status_event_json(const runtime::Status& s, const MachineConfig& mac
 // The machine as the page draws it: axes with their travel, feeds, override range, the stock.
 std::string machine_json(const MachineConfig& machine);
 
+// The height map for the page: the binary grid of `cncore run --heightmap-grid` ("CNCZMAP1",
+// u32 nx, ny, f64 x0, y0, cell in mm, then nx·ny float32 heights row by row, little-endian).
+std::string heightmap_binary(const runtime::HeightMapGrid& grid);
+
 struct Reply {
   int http_status = 200;  // 200 done, 400 a malformed request, 409 refused by the controller
   std::string body;       // {"ok":true} or {"ok":false,"error":"…"}
 };
 
 // A control posted to /api/<name> with a JSON body (names: start, hold, resume, reset, estop,
-// unlock, home, jog, jog-cancel, mdi, override, switches, check, load). Unknown name: 404.
+// unlock, home, jog, jog-cancel, mdi, override, switches, check, reset-stock). Unknown name:
+// 404.
 Reply control(runtime::Controller& c, std::string_view name, const std::string& body);
 
 Reply reply_of(const runtime::Result& r);

@@ -184,10 +184,11 @@ struct HttpServer::Impl {
       seen = message_serial;
     }
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return fmt::format(R"(data: {{"status":{},"program_serial":{},"messages":{}}})"
-                       "\n\n",
-                       status_event_json(s, controller.machine(), v.get(), t), serial,
-                       fresh.dump());
+    return fmt::format(
+        R"(data: {{"status":{},"program_serial":{},"heightmap_version":{},"messages":{}}})"
+        "\n\n",
+        status_event_json(s, controller.machine(), v.get(), t), serial, s.heightmap_version,
+        fresh.dump());
   }
 
   void events(httplib::Response& res) {
@@ -235,6 +236,15 @@ struct HttpServer::Impl {
         v = view;
       }
       res.set_content(v->json(), kJson);
+    });
+    server.Get("/api/heightmap", [this](const httplib::Request&, httplib::Response& res) {
+      const auto map = controller.heightmap();
+      if (!map) {
+        return send(res, {404, R"({"ok":false,"error":"the machine has no [stock]"})"});
+      }
+      res.set_header("X-Heightmap-Version", std::to_string(map->version));
+      res.set_header("Cache-Control", "no-cache");
+      res.set_content(heightmap_binary(*map), "application/octet-stream");
     });
     server.Post("/api/program", [this](const httplib::Request& req, httplib::Response& res) {
       if (auto refused = refuse_post(req)) return send(res, *refused);

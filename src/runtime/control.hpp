@@ -17,6 +17,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "config/machine_config.hpp"
 #include "core/geometry.hpp"
@@ -84,6 +85,24 @@ struct Status {
   std::uint64_t samples_dropped = 0;  // samples the reader of read_samples() did not take in time
   double cycle_work_max_us = 0;       // longest cycle work so far
   Switches switches;
+  // The cutting simulation (a machine with [stock]; docs/runtime.md): cycles whose sample waited
+  // in the cycle thread because the simulation's ring was full (merged into the next one), and
+  // how many cycles behind the cycle the load it reports is.
+  std::uint64_t cutting_coalesced = 0;
+  std::uint64_t cutting_lag_cycles = 0;
+  std::uint64_t heightmap_version = 0;  // changes when a new height map is ready (0: none)
+};
+
+// The stock's height map as the cutting simulation last published it (at most twice a second,
+// when it changed): cell centres at x0 + (i + ½)·cell, y0 + (j + ½)·cell, row-major by Y. A map
+// larger than kMaxSide cells a side is shown by the lowest cell of each k×k block.
+struct HeightMapGrid {
+  static constexpr std::size_t kMaxSide = 256;
+  std::uint64_t version = 0;
+  std::size_t nx = 0, ny = 0;
+  double x0_mm = 0, y0_mm = 0, cell_mm = 0;
+  double bottom_z_mm = 0, top_z_mm = 0;
+  std::vector<float> heights_mm;
 };
 
 // A jog: a straight move of the axes at a feed, incremental or to an absolute machine position,
@@ -234,6 +253,10 @@ class Controller {
   // reader leaves too long are dropped (Status::samples_dropped).
   std::size_t read_samples(std::span<motion::Sample> out);
   std::size_t read_applied(std::span<AppliedCommand> out);
+  // The cutting simulation's latest height map (null without [stock]), and a fresh stock (the
+  // map is also made fresh when a program starts).
+  std::shared_ptr<const HeightMapGrid> heightmap() const;
+  Result reset_stock();
   // The cycle thread's figures (it computes them between two cycles when asked; waits ≤ 1 s).
   // reset: start counting afresh after this reading.
   CycleFigures cycle_figures(bool reset);

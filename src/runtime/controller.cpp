@@ -64,6 +64,7 @@ Status Controller::status() const {
   st.work_offset = impl_->work_offset;
   st.program_loaded = !impl_->program_path.empty();
   st.check_mode = st.state == MachineState::kCheck;
+  if (impl_->cutting) st.heightmap_version = impl_->cutting->version();
   return st;
 }
 

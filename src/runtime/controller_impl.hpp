@@ -15,7 +15,9 @@
 
 #include "core/error.hpp"
 #include "interpreter/interpreter.hpp"
+#include "runtime/adaptive_feed.hpp"
 #include "runtime/control.hpp"
+#include "runtime/cutting.hpp"
 #include "runtime/cycle.hpp"
 #include "runtime/pacing.hpp"
 #include "runtime/persist.hpp"
@@ -69,7 +71,18 @@ struct Controller::Impl {
     if (o.sample_ring > 0) samples = std::make_unique<SpscRing<motion::Sample>>(o.sample_ring);
     if (o.servo == ServoKind::kUdp) output = open_udp_output(o.servo_address);
     if (o.servo == ServoKind::kShm) output = open_shm_output(o.servo_address, 4096);
-    CycleLinks links{&commands, samples.get(), &applied, &status, output.get(), o.lossless_samples};
+    if (machine.cutting.stock.enabled) {
+      cutting = std::make_unique<CuttingThread>(machine);
+      // Adaptive feed on the simulated cut; settings that do not fit the machine only matter
+      // when [adaptive] asks for it at the start (as in `cncore run`).
+      try {
+        adaptive = std::make_unique<AdaptiveFeed>(machine, *cutting);
+      } catch (const InputError&) {
+        if (machine.adaptive.enabled) throw;
+      }
+    }
+    CycleLinks links{&commands,    samples.get(),      &applied,      &status,
+                     output.get(), o.lossless_samples, cutting.get(), adaptive.get()};
     loop = std::make_unique<CycleLoop>(machine, links, start, o.sim_position_error);
     loop->set_stopping(&stop_cycle);
     Status first;
@@ -287,6 +300,8 @@ struct Controller::Impl {
   SpscRing<AppliedCommand> applied;
   Seqlock<Status> status;
   std::unique_ptr<ServoOutput> output;
+  std::unique_ptr<CuttingThread> cutting;  // a machine with [stock]; outlives the cycle thread
+  std::unique_ptr<AdaptiveFeed> adaptive;  // on the cutting simulation's load
   std::unique_ptr<CycleLoop> loop;
   std::mutex control;  // serialises the control methods (the command ring's one producer)
   std::string program_path;

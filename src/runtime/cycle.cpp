@@ -5,6 +5,9 @@
 #include <limits>
 #include <thread>
 
+#include "runtime/adaptive_feed.hpp"
+#include "runtime/cutting.hpp"
+
 namespace cncore::runtime {
 
 namespace {
@@ -424,6 +427,10 @@ void CycleLoop::raise_alarm(AlarmCode alarm, std::uint32_t line) {
 }
 
 void CycleLoop::finish_outputs(std::uint64_t n, motion::Sample& s) {
+  if (links_.cutting != nullptr) links_.cutting->on_cycle(n, s, status_);
+  if (links_.adaptive != nullptr && job_ != nullptr) {
+    job_->kernel.set_override(links_.adaptive->on_cycle(s, status_));
+  }
   const double fe = sim_.step(status_.commanded);
   status_.following_error_mm = fe;
   status_.actual = sim_.actual();

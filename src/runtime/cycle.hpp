@@ -17,13 +17,18 @@
 
 namespace cncore::runtime {
 
+class CuttingThread;
+class AdaptiveFeed;
+
 struct CycleLinks {
   SpscRing<CycleCommand>* commands = nullptr;   // control → cycle
   SpscRing<motion::Sample>* samples = nullptr;  // cycle → read_samples (may be null)
   SpscRing<AppliedCommand>* applied = nullptr;  // cycle → read_applied
   Seqlock<Status>* status = nullptr;
-  ServoOutput* output = nullptr;  // may be null (sim only)
-  bool lossless_samples = false;  // ControllerOptions::lossless_samples
+  ServoOutput* output = nullptr;     // may be null (sim only)
+  bool lossless_samples = false;     // ControllerOptions::lossless_samples
+  CuttingThread* cutting = nullptr;  // the cutting simulation (a machine with [stock])
+  AdaptiveFeed* adaptive = nullptr;  // adaptive feed control on its load
 };
 
 class CycleLoop {

@@ -1,7 +1,8 @@
 // The web page of `cncore serve --http` in the Debian Chromium (headless), driven by
 // playwright-core: a program loaded through the page runs, the DRO moves, Run → Idle, hold and
 // resume, an override change that the served trajectory's override column follows, E-stop, a bad
-// program's error at its line, screenshots with non-blank canvases, and a stretch of a
+// program's error at its line, screenshots with non-blank canvases, the cutting simulation's
+// height map as a surface with the spindle load plotted, and a stretch of a
 // fine-segment program during which the page keeps ≥ 20 events/s with flat memory.
 //   node hmi_browser_test.mjs --cncore BIN --source DIR --modules DIR --out DIR
 //        [--endurance-seconds S] [--endurance-only]
@@ -251,6 +252,63 @@ async function walkThrough(browser) {
        'the program checked, none faster than the override allows');
 }
 
+// ---- the cutting simulation: a machine with [stock], its height map drawn as a surface ----
+async function cuttingSimulation(browser) {
+  const serve = startServe(['--machine', path.join(source, 'examples/cutting/mill.toml'),
+                            '--program', path.join(source, 'examples/cutting/pocket.ngc')]);
+  const url = await serve.url;
+  const { page, errors } = await openPage(browser, url);
+  await page.waitForFunction(() => window.hmiStats.programLoads >= 1 && window.hmiStats.heightmaps >= 1);
+  await page.click('#view-buttons [data-view=top]');
+  await sleep(300);
+  // The pocket's slots run at Y −15, −10, −5 (Ø10 flat end mill, 2 mm deep): a point on its floor
+  // between two of the path's lines, and one of the stock's top far from every move (the first
+  // of these that the top view shows).
+  const pocket = [0, -12.5, -2];
+  const outside = await page.evaluate((points) => points.find((p) => window.hmi.view.colorAt(p)),
+      [[22, -18, 0], [-22, 20, 0], [-22, -5, 0], [22, 5, 0]]);
+  const look = () => page.evaluate(([p, o]) => {
+    const v = window.hmi.view;
+    return { pocket: v.colorAt(p), outside: v.colorAt(o), z: v.surfaceHeightAt(p[0], p[1]),
+             surface: !!v.surface && v.surface.visible, box: v.stock.visible };
+  }, [pocket, outside]);
+  const before = await look();
+  assert.ok(before.surface && !before.box, 'the height map replaces the stock box');
+  assert.ok(before.pocket && before.outside, 'both points are on the canvas');
+  assert.equal(before.z, 0, 'the fresh stock is at its top');
+
+  await page.click('#btn-start');
+  await stateIs(page, 'Run', 5000);
+  const cut = await waitFor(page, 'spindle load', (s) => s.load_pct > 0);
+  step(`cutting: load ${cut.load_pct.toFixed(1)} % at line ${cut.line}`);
+  await stateIs(page, 'Idle', 120000);
+  const done = (await status(page)).cycle;
+  // The map after the last cut (published at most twice a second, fetched when it changed).
+  await page.waitForFunction(() => window.hmi.view.surfaceHeightAt(0, -12.5) < -1.99, null, { timeout: 10000 });
+  const after = await look();
+  const diff = (a, b) => a.reduce((sum, v, i) => sum + Math.abs(v - b[i]), 0);
+  step(`surface: pocket z ${after.z}; pixel at the pocket ${before.pocket} → ${after.pocket}, ` +
+       `outside ${before.outside} → ${after.outside}`);
+  assert.ok(Math.abs(after.z - -2) < 1e-3, 'the surface is at the programmed depth in the pocket');
+  assert.ok(diff(after.pocket, before.pocket) > 40, 'the pocket shows on the canvas');
+  assert.ok(diff(after.outside, before.outside) < 20, 'the stock elsewhere looks the same');
+  const load = await page.evaluate(() => {
+    const d = window.hmi.plots.load.data;
+    return { peak: Math.max(...d[1]), target: d[2][d[2].length - 1] };
+  });
+  step(`load plot: peak ${load.peak.toFixed(1)} %, target ${load.target} %; ${done} cycles`);
+  assert.ok(load.peak > 5, 'the load plot has the cut');
+  assert.equal(load.target, 60, 'the target line is [adaptive] target_load_pct');
+  await screenshot(page, 'hmi-cut.png');
+
+  await page.click('#btn-reset-stock');
+  await page.waitForFunction(() => window.hmi.view.surfaceHeightAt(0, -12.5) === 0, null, { timeout: 10000 });
+  step('reset stock: the surface is at the top again');
+  assert.deepEqual(errors, [], 'no script errors on the page');
+  await page.close();
+  await stopServe(serve);
+}
+
 // ---- endurance: a fine-segment program with the page open ----
 function fineProgram(file, seconds) {
   // A square spiral of 0.1 mm chords at F600 (10 mm/s: 100 blocks/s), long enough for `seconds`.
@@ -329,6 +387,7 @@ const browser = await chromium.launch({
 });
 try {
   if (!enduranceOnly) await walkThrough(browser);
+  if (!enduranceOnly) await cuttingSimulation(browser);
   if (enduranceSeconds > 0) await endurance(browser, enduranceSeconds);
   console.log('hmi browser test: passed');
 } finally {

@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -175,6 +176,62 @@ TEST_F(Controls, TheStatusEventCarriesWorkPositionsAndTheProgrammedFeed) {
   EXPECT_FALSE(j["machine"].contains("a"));  // only the enabled axes
   EXPECT_EQ(j["programmed_feed_mm_min"], 0.0);
   EXPECT_EQ(j["t"], 1.5);
+}
+
+// The height map as GET /api/heightmap sends it, read back the way the page's script reads it;
+// the stock's controls on a machine with [stock] and without.
+TEST(Heightmap, TheServedGridReadsBackAsThePageReadsIt) {
+  MachineConfig m = parse_machine_config(R"(
+[stock]
+min_mm = [-10, -5, -8]
+size_mm = [20, 10, 8]
+cell_mm = 0.5
+[[tools]]
+number = 1
+diameter_mm = 4
+)",
+                                         "stock.toml");
+  runtime::ControllerOptions o;
+  o.realtime = false;
+  o.sample_ring = 0;
+  runtime::Controller c(m, o);
+  ASSERT_EQ(control(c, "mdi", R"({"line":"G0 X0 Y0 Z1\nG1 Z-2 F1000\nG0 Z1"})").http_status, 200);
+  std::shared_ptr<const runtime::HeightMapGrid> g;
+  for (int i = 0; i < 10000; ++i) {
+    g = c.heightmap();
+    if (g && g->heights_mm[10 * 40 + 20] < -1.999) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_TRUE(g);
+  const std::string b = heightmap_binary(*g);
+  ASSERT_EQ(b.size(), 40 + 40 * 20 * 4U);
+  EXPECT_EQ(b.substr(0, 8), "CNCZMAP1");
+  std::uint32_t nx = 0, ny = 0;
+  double x0 = 0, y0 = 0, cell = 0;
+  std::memcpy(&nx, b.data() + 8, 4);
+  std::memcpy(&ny, b.data() + 12, 4);
+  std::memcpy(&x0, b.data() + 16, 8);
+  std::memcpy(&y0, b.data() + 24, 8);
+  std::memcpy(&cell, b.data() + 32, 8);
+  EXPECT_EQ(nx, 40U);
+  EXPECT_EQ(ny, 20U);
+  EXPECT_EQ(x0, -10);
+  EXPECT_EQ(y0, -5);
+  EXPECT_EQ(cell, 0.5);
+  auto height = [&b](std::size_t i, std::size_t j) {
+    float h = 0;
+    std::memcpy(&h, b.data() + 40 + 4 * (j * 40 + i), 4);
+    return h;
+  };
+  // Under the plunge (cell centre X 0.25, Y 0.25); the post filter rounds the turn at the bottom.
+  EXPECT_NEAR(height(20, 10), -2, 1e-3);
+  EXPECT_EQ(height(0, 0), 0);  // a corner of the stock: its top
+  EXPECT_EQ(json::parse(machine_json(m))["load_target_pct"], m.adaptive.target_load_pct);
+  EXPECT_EQ(control(c, "reset-stock", "").http_status, 200);
+
+  runtime::Controller plain(default_machine_config(), o);
+  EXPECT_EQ(plain.heightmap(), nullptr);
+  EXPECT_EQ(control(plain, "reset-stock", "").http_status, 409);
 }
 
 }  // namespace

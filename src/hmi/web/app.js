@@ -11,11 +11,13 @@ if (fromUrl) { token = fromUrl; sessionStorage.setItem('cncore-token', token); }
 
 let machine = null, program = null, programSerial = -1, programLines = [], errorLine = 0;
 let lastStatus = null, shownLine = -1, canControl = false;
+let heightmapVersion = 0, heightmapFetching = false, heightmapFetchedAt = 0;
 const view = new View3D($('view3d'));
 const plots = new Plots();
 
 // What the test (and an operator's console) can read: how the page keeps up with the stream.
-const stats = window.hmiStats = { events: 0, eventsPerS: 0, lagMs: 0, maxLagMs: 0, programLoads: 0 };
+const stats = window.hmiStats = { events: 0, eventsPerS: 0, lagMs: 0, maxLagMs: 0, programLoads: 0,
+                                  heightmaps: 0 };
 let rateCount = 0, rateStart = performance.now(), clockOffset = null;
 
 async function post(name, body, contentType = 'application/json') {
@@ -66,6 +68,33 @@ async function loadProgram() {
   shownLine = -1;
   renderProgramText(1, '');
   stats.programLoads++;
+}
+
+// ---- the cutting simulation's height map: fetched when its version changed, at most 2 a second ----
+async function fetchHeightmap() {
+  heightmapFetching = true;
+  heightmapFetchedAt = performance.now();
+  try {
+    const res = await fetch('/api/heightmap');
+    if (!res.ok) return;
+    const buf = await res.arrayBuffer();
+    // "CNCZMAP1", u32 nx, ny, f64 x0, y0, cell, then float32 heights (docs/hmi.md).
+    const d = new DataView(buf);
+    const nx = d.getUint32(8, true), ny = d.getUint32(12, true);
+    view.setHeightmap({ version: Number(res.headers.get('X-Heightmap-Version')), nx, ny,
+                        x0: d.getFloat64(16, true), y0: d.getFloat64(24, true),
+                        cell: d.getFloat64(32, true), z: new Float32Array(buf, 40, nx * ny) });
+    stats.heightmaps++;
+  } finally {
+    heightmapFetching = false;
+  }
+}
+
+function maybeFetchHeightmap(version) {
+  if (!version || version === heightmapVersion || heightmapFetching ||
+      performance.now() - heightmapFetchedAt < 500) return;
+  heightmapVersion = version;
+  fetchHeightmap();
 }
 
 // ---- status ----
@@ -137,6 +166,7 @@ function onStatus(msg) {
   const [lo, hi] = view.feedRange || [0, 1];
   view.setTool([s.machine.x ?? 0, s.machine.y ?? 0, s.machine.z ?? 0], (s.feed_mm_min - lo) / (hi - lo));
   plots.push(s.t, s);
+  maybeFetchHeightmap(msg.heightmap_version);
 }
 
 function syncSlider(id, value) {
@@ -214,7 +244,8 @@ function wire() {
     e.target.value = '';
   });
   const simple = { start: 'btn-start', hold: 'btn-hold', resume: 'btn-resume', reset: 'btn-reset',
-                   home: 'btn-home', unlock: 'btn-unlock', estop: 'btn-estop' };
+                   home: 'btn-home', unlock: 'btn-unlock', estop: 'btn-estop',
+                   'reset-stock': 'btn-reset-stock' };
   for (const [name, id] of Object.entries(simple)) $(id).addEventListener('click', () => post(name));
   for (const [id, key] of [['feed-override', 'feed_pct'], ['rapid-override', 'rapid_pct']]) {
     const el = $(id);
@@ -264,6 +295,8 @@ async function main() {
   $('machine-name').textContent = machine.name;
   $('feed-override').max = machine.max_override_pct;
   plots.setMaxOverride(machine.max_override_pct);
+  plots.setLoadTarget(machine.load_target_pct);
+  $('btn-reset-stock').hidden = !machine.stock;
   view.setMachine(machine);
   jogButtons();
   wire();

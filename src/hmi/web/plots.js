@@ -1,4 +1,5 @@
-// Live plots (uPlot): path speed against the programmed feed, the overrides, the spindle load.
+// Live plots (uPlot): path speed against the programmed feed, the overrides, the spindle load
+// against its target ([adaptive] target_load_pct).
 // Fixed-length windows of the last WINDOW_S seconds: memory does not grow with the run.
 const WINDOW_S = 30;
 
@@ -24,7 +25,9 @@ export class Plots {
     this.override = makePlot(document.getElementById('plot-override'), 'override, %',
         [['feed', '#81c784'], ['rapid', '#ce93d8', [6, 4]]], () => [0, this.maxOverride]);
     this.load = makePlot(document.getElementById('plot-load'), 'spindle load, %',
-        [['load', '#e57373']], [0, 120]);
+        [['load', '#e57373'], ['target', '#ffb74d', [6, 4]]], () => [0, this.maxLoad]);
+    this.loadTarget = 60;
+    this.maxLoad = 120;
     this.pending = false;
     this.maxOverride = 200;
   }
@@ -37,7 +40,8 @@ export class Plots {
     };
     add(this.speed, [s.feed_mm_min, s.programmed_feed_mm_min]);
     add(this.override, [s.feed_override_pct, s.rapid_override_pct]);
-    add(this.load, [s.load_pct]);
+    add(this.load, [s.load_pct, this.loadTarget]);
+    if (s.load_pct > this.maxLoad) this.maxLoad = Math.ceil(s.load_pct / 50) * 50;
     // Drawn once per animation frame at most: a slow frame does not queue up redraws.
     if (!this.pending) {
       this.pending = true;
@@ -46,6 +50,10 @@ export class Plots {
         for (const p of [this.speed, this.override, this.load]) p.plot.setData(p.data);
       });
     }
+  }
+
+  setLoadTarget(pct) {
+    this.loadTarget = pct;
   }
 
   setMaxOverride(pct) {

@@ -1,5 +1,6 @@
 // The 3D view: the program's path (rapids dashed, feed moves coloured by speed on a scale of
-// their own), the machine's travel box, the tool at its live position with a trail.
+// their own), the machine's travel box, the stock (a box, or the cutting simulation's height map
+// as a surface), the tool at its live position with a trail.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
@@ -14,6 +15,18 @@ export function speedColor(f, out) {
   const t = x - i;
   for (let k = 0; k < 3; ++k) out[k] = stops[i][k] + (stops[i + 1][k] - stops[i][k]) * t;
   return out;
+}
+
+// The height ramp of `cncore run --heightmap` (u = 0 stock bottom … 1 top: dark blue, teal, warm
+// white), times a shading factor, into out[k…k+2] as 0…1.
+function heightColor(u, out, k, shade) {
+  u = Math.min(Math.max(u, 0), 1);
+  const r = u < 0.5 ? 20 + u * 2 * 40 : 60 + (u - 0.5) * 2 * 180;
+  const g = u < 0.5 ? 30 + u * 2 * 120 : 150 + (u - 0.5) * 2 * 85;
+  const b = u < 0.5 ? 110 + u * 2 * 70 : 180 + (u - 0.5) * 2 * 30;
+  out[k] = Math.min(r * shade / 255, 1);
+  out[k + 1] = Math.min(g * shade / 255, 1);
+  out[k + 2] = Math.min(b * shade / 255, 1);
 }
 
 export class View3D {
@@ -101,6 +114,7 @@ export class View3D {
       this.stock = new THREE.Mesh(g, new THREE.MeshBasicMaterial(
           { color: 0x8d9bb0, transparent: true, opacity: 0.18, depthWrite: false }));
       this.scene.add(this.stock);
+      this.stockZ = [mz, mz + sz];
     }
     this.setView('iso');
   }
@@ -209,6 +223,98 @@ export class View3D {
     this.controls.target.copy(centre);
     this.controls.update();
     this.dirty = true;
+  }
+
+  // The cutting simulation's height map (GET /api/heightmap: nx × ny heights at cell centres
+  // x0 + (i + ½)·cell, y0 + (j + ½)·cell) as a surface in place of the stock box: one vertex per
+  // cell, coloured by height on the ramp of the run's PNG (dark blue, teal, light) and shaded by
+  // its slope under a light from the north-west.
+  setHeightmap(g) {
+    const n = g.nx * g.ny;
+    if (!this.surface || this.surface.userData.nx !== g.nx || this.surface.userData.ny !== g.ny) {
+      if (this.surface) {
+        this.surface.geometry.dispose();
+        this.scene.remove(this.surface);
+      }
+      const geo = new THREE.BufferGeometry();
+      const pos = new Float32Array(n * 3);
+      for (let j = 0; j < g.ny; ++j) {
+        for (let i = 0; i < g.nx; ++i) {
+          const k = 3 * (j * g.nx + i);
+          pos[k] = g.x0 + (i + 0.5) * g.cell;
+          pos[k + 1] = g.y0 + (j + 0.5) * g.cell;
+        }
+      }
+      const idx = new Uint32Array(Math.max(g.nx - 1, 0) * Math.max(g.ny - 1, 0) * 6);
+      let t = 0;
+      for (let j = 0; j + 1 < g.ny; ++j) {
+        for (let i = 0; i + 1 < g.nx; ++i) {
+          const a = j * g.nx + i;
+          idx.set([a, a + 1, a + g.nx + 1, a, a + g.nx + 1, a + g.nx], t);
+          t += 6;
+        }
+      }
+      geo.setAttribute('position', new THREE.BufferAttribute(pos, 3));
+      geo.setAttribute('color', new THREE.BufferAttribute(new Float32Array(n * 3), 3));
+      geo.setIndex(new THREE.BufferAttribute(idx, 1));
+      // Slightly translucent: the program's path inside the stock shows through.
+      this.surface = new THREE.Mesh(geo, new THREE.MeshBasicMaterial(
+          { vertexColors: true, side: THREE.DoubleSide, transparent: true, opacity: 0.85 }));
+      this.surface.userData = { nx: g.nx, ny: g.ny };
+      this.scene.add(this.surface);
+    }
+    const geo = this.surface.geometry;
+    const pos = geo.attributes.position.array, col = geo.attributes.color.array;
+    // Coloured from the deepest cell so far (dark blue) to the stock's top (light): a shallow cut
+    // in a tall stock still stands out.
+    const hi = this.stockZ ? this.stockZ[1] : 1;
+    let lo = hi;
+    for (let k = 0; k < n; ++k) lo = Math.min(lo, g.z[k]);
+    const span = hi > lo ? hi - lo : 1;
+    const h = (i, j) => g.z[Math.min(Math.max(j, 0), g.ny - 1) * g.nx + Math.min(Math.max(i, 0), g.nx - 1)];
+    for (let j = 0; j < g.ny; ++j) {
+      for (let i = 0; i < g.nx; ++i) {
+        const k = j * g.nx + i, z = g.z[k];
+        pos[3 * k + 2] = z;
+        // Slope shading: n = (−dz/dx, −dz/dy, 1) against L = (−1, 1, √2)/2.
+        const dx = (h(i + 1, j) - h(i - 1, j)) / (2 * g.cell), dy = (h(i, j + 1) - h(i, j - 1)) / (2 * g.cell);
+        const shade = Math.max(0.35, (dx * 0.5 - dy * 0.5 + Math.SQRT1_2) / Math.sqrt(dx * dx + dy * dy + 1));
+        heightColor(hi > lo ? (z - lo) / span : 1, col, 3 * k, shade / Math.SQRT1_2 * 0.8);
+      }
+    }
+    geo.attributes.position.needsUpdate = true;
+    geo.attributes.color.needsUpdate = true;
+    geo.computeBoundingBox();
+    geo.computeBoundingSphere();
+    this.surfaceVersion = g.version;
+    if (this.stock) this.stock.visible = false;
+    this.dirty = true;
+  }
+
+  // The canvas colour (0–255 each) at the screen point of machine position p, null off the
+  // canvas (the test's check that the surface shows a cut where the program cuts).
+  colorAt(p) {
+    const v = new THREE.Vector3(...p).project(this.camera);
+    this.renderer.render(this.scene, this.camera);
+    const gl = this.renderer.getContext();
+    const x = Math.round((v.x + 1) / 2 * gl.drawingBufferWidth);
+    const y = Math.round((v.y + 1) / 2 * gl.drawingBufferHeight);
+    if (x < 0 || y < 0 || x >= gl.drawingBufferWidth || y >= gl.drawingBufferHeight) return null;
+    const px = new Uint8Array(4);
+    gl.readPixels(x, y, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    return [px[0], px[1], px[2]];
+  }
+
+  // The surface's height at the vertex nearest to (x, y), null without a surface.
+  surfaceHeightAt(x, y) {
+    if (!this.surface) return null;
+    const p = this.surface.geometry.attributes.position.array;
+    let best = Infinity, z = null;
+    for (let k = 0; k < p.length; k += 3) {
+      const d = (p[k] - x) ** 2 + (p[k + 1] - y) ** 2;
+      if (d < best) { best = d; z = p[k + 2]; }
+    }
+    return z;
   }
 
   // How many canvas pixels differ from the background (the test's check of a non-blank view).
