@@ -72,11 +72,13 @@ struct Controller::Impl {
     if (o.servo == ServoKind::kUdp) output = open_udp_output(o.servo_address);
     if (o.servo == ServoKind::kShm) output = open_shm_output(o.servo_address, 4096);
     if (machine.cutting.stock.enabled) {
-      cutting = std::make_unique<CuttingThread>(machine);
+      // Both keep a reference: to the configuration as started, which never changes (the
+      // running `machine` does, under set_limits).
+      cutting = std::make_unique<CuttingThread>(configured);
       // Adaptive feed on the simulated cut; settings that do not fit the machine only matter
       // when [adaptive] asks for it at the start (as in `cncore run`).
       try {
-        adaptive = std::make_unique<AdaptiveFeed>(machine, *cutting);
+        adaptive = std::make_unique<AdaptiveFeed>(configured, *cutting);
       } catch (const InputError&) {
         if (machine.adaptive.enabled) throw;
       }
