@@ -99,6 +99,7 @@ const CorpusProgram kPrograms[] = {
       testing::Property::kPath, testing::Property::kJointSpeed, 20.0}},
     {"linuxcnc-tp/arc_time.ngc", true, {}, {}, {}, true},
     {"linuxcnc-tp/circle_small_segments_ncd.ngc", true, {}, {}, {}, true},
+    {"linuxcnc-tp/full_xy.ngc"},
     {"linuxcnc-tp/line-contouring-xz.ngc", true, {}, {}, {}, true},
     {"linuxcnc-tp/short_segments_0.001.ngc", true, {}, {}, {}, true},
     {"linuxcnc-tp/tight-corner-tolerance.ngc", true, {}, {}, {}, true},
