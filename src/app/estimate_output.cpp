@@ -39,11 +39,8 @@ std::string slow_lines_text(const std::vector<SlowLine>& lines) {
   return o;
 }
 
-// A cause's key: its name with '_' for ' ' (as in the summary JSON).
 std::string cause_key(std::size_t i) {
-  std::string key = io::loss_cause_name(static_cast<io::LossCause>(i));
-  std::replace(key.begin(), key.end(), ' ', '_');
-  return key;
+  return io::loss_cause_key(static_cast<io::LossCause>(i));
 }
 
 // Bar colours of the causes, in the order of io::LossCause.

@@ -81,6 +81,8 @@ enum class LossCause : std::uint8_t {
 };
 inline constexpr std::size_t kLossCauses = 7;
 const char* loss_cause_name(LossCause cause);
+// Its key in the summary JSON and the estimate CSV: the name with '_' for ' '.
+std::string loss_cause_key(LossCause cause);
 
 struct ReportLosses {
   // Time lost against F as written, by cause; the causes add up to total_s().

@@ -40,6 +40,12 @@ const char* loss_cause_name(LossCause cause) {
   return "";
 }
 
+std::string loss_cause_key(LossCause cause) {
+  std::string key = loss_cause_name(cause);
+  std::replace(key.begin(), key.end(), ' ', '_');
+  return key;
+}
+
 void ReportObserver::on_share(const TimeShare& sh) {
   const motion::Sample& s = *sh.sample;
   if (!group_.active || sh.line != group_.spot.line || sh.rapid != group_.spot.rapid) {
@@ -335,9 +341,7 @@ std::string summary_json_with_losses(const std::string& summary_json, const Repo
   nlohmann::ordered_json j = nlohmann::ordered_json::parse(summary_json);
   nlohmann::ordered_json c = nlohmann::ordered_json::object();
   for (std::size_t i = 0; i < kLossCauses; ++i) {
-    std::string key = loss_cause_name(static_cast<LossCause>(i));
-    std::replace(key.begin(), key.end(), ' ', '_');
-    c[key] = losses.cause_s[i];
+    c[loss_cause_key(static_cast<LossCause>(i))] = losses.cause_s[i];
   }
   c["total"] = losses.total_s();
   j["time_lost_by_cause_s"] = c;
