@@ -118,6 +118,7 @@ class TrajectoryRecorder {
 void load_grbl_settings(grbl::SettingsStore& store, MachineConfig& machine,
                         const std::string& state_dir) {
   store.settings = grbl::Settings::from_machine(machine);
+  store.defaults = store.settings;
   if (state_dir.empty()) return;
   std::filesystem::create_directories(state_dir);
   store.path = state_dir + "/grbl.json";

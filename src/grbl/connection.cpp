@@ -393,6 +393,10 @@ void Connection::write_setting(std::string_view line, std::string& out) {
     error_out(out, static_cast<Error>(*e));
     return;
   }
+  if (adopt(next, out)) line_out(out, "ok");
+}
+
+bool Connection::adopt(const Settings& next, std::string& out) {
   const runtime::MachineLimits now = controller_.limits();
   MachineConfig m = controller_.machine();
   runtime::apply_limits(m, now);
@@ -402,12 +406,12 @@ void Connection::write_setting(std::string_view line, std::string& out) {
       line_out(out, "[MSG:" + r.error + "]");
       error_out(out,
                 moving(controller_.status().state) ? Error::kIdleError : Error::kInvalidStatement);
-      return;
+      return false;
     }
   }
   store_.settings = next;
   store_.save();
-  line_out(out, "ok");
+  return true;
 }
 
 void Connection::restore(std::string_view what, std::string& out) {
@@ -415,11 +419,14 @@ void Connection::restore(std::string_view what, std::string& out) {
     error_out(out, Error::kInvalidStatement);
     return;
   }
+  if (busy_ || moving(controller_.status().state)) {
+    error_out(out, Error::kIdleError);
+    return;
+  }
   if (what == "$" || what == "*") {
-    const std::array<std::string, 2> startup = store_.settings.startup;
-    store_.settings = Settings::from_machine(controller_.machine());
-    if (what == "$") store_.settings.startup = startup;
-    store_.save();
+    Settings next = store_.defaults;
+    if (what == "$") next.startup = store_.settings.startup;
+    if (!adopt(next, out)) return;
   }
   if (what == "#" || what == "*") {
     // The work offsets G54…G59.3 and G92 through cncore's own interpreter.

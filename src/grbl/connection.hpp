@@ -30,6 +30,7 @@ inline constexpr std::size_t kLineBytes = 256;      // longest line (grblHAL's l
 // Settings and startup lines shared by the connections of one process, with where they persist.
 struct SettingsStore {
   Settings settings;
+  Settings defaults;  // the machine configuration's values, before any write: what $RST=$ restores
   std::string path;   // the state folder's grbl.json; empty: not kept
   void save() const;  // temp file + rename
 };
@@ -59,6 +60,9 @@ class Connection {
   bool gcode(const std::string& line, std::string& out);   // false: must wait for the machine
   void jog(std::string_view body, std::string& out);
   void write_setting(std::string_view line, std::string& out);
+  // Makes `next` the settings and puts their limits into the machine; false (reply written) when
+  // the machine refuses them.
+  bool adopt(const Settings& next, std::string& out);
   void restore(std::string_view what, std::string& out);
   void report_status(std::string& out);
   void offsets(std::string& out) const;

@@ -48,6 +48,20 @@ def connect_checks(c, how):
     check(rep.startswith("<Idle|MPos:"), f"{how}: ? gives an Idle status report ({rep})")
 
 
+def rapid_top_speed(c):
+    """The highest FS: feed seen while `G0 X100` runs (then back to X0)."""
+    expect_reply(c, "G0 X100", "ok")
+    top = 0.0
+    rep = c.wait_state("Run")
+    end = time.time() + 10
+    while not rep.startswith("<Idle") and time.time() < end:
+        top = max(top, float(field(rep, "FS").split(",")[0]))
+        rep = c.status()
+    expect_reply(c, "G0 X0", "ok")
+    c.wait_state("Idle")
+    return top
+
+
 def test_settings(c, workdir):
     got = expect_reply(c, "$$", "ok")
     d = dict(x[1:].split("=", 1) for x in got[:-1])
@@ -56,16 +70,8 @@ def test_settings(c, workdir):
     check(d.get("130") == "600" and d.get("11") == "0.010", "$130 travel, $11 contour tolerance")
     expect_reply(c, "$110=5000", "ok")
     # The write changes the running machine at once: a rapid along X runs at 5000 mm/min.
-    expect_reply(c, "G0 X100", "ok")
-    top = 0.0
-    rep = c.wait_state("Run")
-    end = time.time() + 10
-    while not rep.startswith("<Idle") and time.time() < end:
-        top = max(top, float(field(rep, "FS").split(",")[0]))
-        rep = c.status()
+    top = rapid_top_speed(c)
     check(4900 < top <= 5000.5, f"after $110=5000 the X rapid runs at 5000 mm/min ({top})")
-    expect_reply(c, "G0 X0", "ok")
-    c.wait_state("Idle")
     expect_reply(c, "$100=80", "ok", "$100 steps/mm accepted")
     expect_reply(c, "$110=-1", "error:4")
     expect_reply(c, "$20=0", "error:3", "$20=0 (soft limits always on)")
@@ -333,6 +339,21 @@ def main():
             tcp.until("Grbl 1.1h")
             got = tcp.command("$$")
             check("$110=15000" in got, "restart: the restored settings are kept")
+            expect_reply(tcp, "$110=5000", "ok")
+            tcp.close()
+        finally:
+            server.stop()
+        # $RST=$ restores the configuration file's values, not those persisted at the start,
+        # and the running machine takes them at once.
+        server = Server(cncore, workdir, machine)
+        try:
+            tcp = Client.tcp(server.port)
+            tcp.until("Grbl 1.1h")
+            check("$110=5000" in tcp.command("$$"), "restart: the write of the last run is kept")
+            expect_reply(tcp, "$RST=$", "ok")
+            check("$110=15000" in tcp.command("$$"), "$RST=$: the configuration's $110 again")
+            top = rapid_top_speed(tcp)
+            check(top > 5100, f"$RST=$: the X rapid is faster than 5000 mm/min again ({top})")
             tcp.close()
         finally:
             server.stop()
