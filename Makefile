@@ -6,12 +6,13 @@ BUILD  := build/$(PRESET)
 CNCORE := $(BUILD)/src/app/cncore
 
 # libpaho-mqtt*: the MQTT publisher of `cncore serve --mqtt`; mosquitto, mosquitto-clients and
-# openssl: the broker, subscriber and test CA its tests start.
+# openssl: the broker, subscriber and test CA its tests start. udev: its `udevadm` is how CNCjs
+# (the sender its test starts) lists serial ports; without it CNCjs's page lists none.
 DEB_PACKAGES := cmake ninja-build g++ make pkg-config python3 \
   libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev libfast-float-dev \
   libmuparser-dev libgtest-dev libgmock-dev libbenchmark-dev librapidcheck-dev libpng-dev time \
   chromium dpkg-dev libpaho-mqtt-dev libpaho-mqttpp-dev mosquitto mosquitto-clients openssl \
-  libcpp-httplib-dev
+  libcpp-httplib-dev udev
 # Node.js and npm (uPlot for the HTML report) come from Debian only when no `npm` is on the PATH:
 # a machine with Node.js from elsewhere has its own npm, which Debian's package conflicts with.
 NODE_PACKAGES := nodejs npm
