@@ -16,6 +16,7 @@
 
 #include "config/adaptive_section.hpp"
 #include "config/cutting_config_toml.hpp"
+#include "config/probe_section.hpp"
 #include "config/servo_section.hpp"
 #include "config/toml_reader.hpp"
 #include "core/error.hpp"
@@ -495,10 +496,13 @@ MachineConfig parse_machine_config(std::string_view toml_text, const std::string
       config_detail::read_adaptive_section(source_name, key, node, c);
     } else if (k == "servo") {
       config_detail::read_servo_section(source_name, r.table(key, node, k), c.servo);
+    } else if (k == "probe") {
+      config_detail::read_probe_section(source_name, r.table(key, node, k), c.probe);
     } else {
-      r.unknown(key, k,
-                " (sections are [motion], [axes.<x|y|z|a|b|c>], [interpreter], [tables], "
-                "[direction_correction], [stock], [[tools]], [cutting], [adaptive], [servo])");
+      r.unknown(
+          key, k,
+          " (sections are [motion], [axes.<x|y|z|a|b|c>], [interpreter], [tables], "
+          "[direction_correction], [stock], [[tools]], [cutting], [adaptive], [servo], [probe])");
     }
   }
   validate_cutting_config(source_name, c.cutting, cutting_at);
@@ -655,6 +659,7 @@ std::string machine_config_to_toml(const MachineConfig& c) {
   o += cutting_config_to_toml(c.cutting);
   o += config_detail::adaptive_section_to_toml(c);
   o += config_detail::servo_section_to_toml(c.servo);
+  o += config_detail::probe_section_to_toml(c.probe);
   return o;
 }
 

@@ -7,6 +7,7 @@
 #include <map>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "config/correction_law.hpp"
 #include "config/cutting_config.hpp"
@@ -79,6 +80,21 @@ struct ServoConfig {
   friend bool operator==(const ServoConfig&, const ServoConfig&) = default;
 };
 
+// [probe] (G38.2–G38.5): the probe trips where the tool tip (the controlled point) enters one of
+// these solids, given in machine coordinates.
+struct ProbeBox {
+  std::array<double, 3> min_mm{0, 0, 0};
+  std::array<double, 3> max_mm{0, 0, 0};
+
+  friend bool operator==(const ProbeBox&, const ProbeBox&) = default;
+};
+struct ProbeConfig {
+  bool touch_stock = true;      // the [stock] box is one of them, when there is one
+  std::vector<ProbeBox> boxes;  // more solids
+
+  friend bool operator==(const ProbeConfig&, const ProbeConfig&) = default;
+};
+
 struct MachineConfig {
   std::string name = "built-in 3-axis mill";
 
@@ -137,6 +153,9 @@ struct MachineConfig {
 
   // [servo] (cncore serve)
   ServoConfig servo;
+
+  // [probe] (G38.2–G38.5)
+  ProbeConfig probe;
 
   friend bool operator==(const MachineConfig&, const MachineConfig&) = default;
 

@@ -85,6 +85,8 @@ std::string motion_word(const interp::ModalState& p) {
       return "G3";
     case interp::Motion::kCycle:
       return fmt::format("G{}", p.cycle / 10);
+    case interp::Motion::kProbe:
+      return fmt::format("G38.{}", p.probe_code - 380);
     case interp::Motion::kNone:
       break;
   }

@@ -69,7 +69,7 @@ CodeInfo g_code_info(int code10) {
     case 383:
     case 384:
     case 385:
-      return no(GGroup::kMotion, "probing");
+      return ok(GGroup::kMotion, "straight probe");
     case 400:
       return ok(GGroup::kCutterComp, "cutter compensation off");
     case 410:

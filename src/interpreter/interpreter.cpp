@@ -387,6 +387,9 @@ void Interpreter::Impl::execute_motion(const Words::Code* nonmodal, bool axes_fo
   const int nm = nonmodal != nullptr ? nonmodal->code10 : -1;
   const Words::Code* motion_word = w.group(GGroup::kMotion);
   if (motion_word != nullptr) set_motion_mode(motion_word->code10);
+  if (motion_word != nullptr && modal_.motion == Motion::kProbe && !have_axes) {
+    fail(motion_word->col, fmt::format("G38.{} without axis words", motion_word->code10 - 380));
+  }
   const bool arc_mode = modal_.motion == Motion::kArcCw || modal_.motion == Motion::kArcCcw;
   const bool have_centre = w.has('i') || w.has('j') || w.has('k');
   const bool cycle_mode = modal_.motion == Motion::kCycle;
@@ -420,6 +423,8 @@ void Interpreter::Impl::execute_motion(const Words::Code* nonmodal, bool axes_fo
         canned_cycle(motion_word != nullptr ? motion_word->col : col);
       } else if (const AxisVec target = target_from_words(machine_coords); arc_mode) {
         arc(target, modal_.motion == Motion::kArcCcw, col);
+      } else if (modal_.motion == Motion::kProbe) {
+        probe_motion(target, col);
       } else {
         line_motion(target, col);
       }
@@ -560,6 +565,13 @@ void Interpreter::Impl::set_motion_mode(int code10) {
       break;
     case 800:
       modal_.motion = Motion::kNone;
+      break;
+    case 382:
+    case 383:
+    case 384:
+    case 385:
+      modal_.motion = Motion::kProbe;
+      modal_.probe_code = code10;
       break;
     default:
       modal_.motion = Motion::kCycle;

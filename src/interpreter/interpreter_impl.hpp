@@ -47,6 +47,8 @@ inline constexpr int kParamWorkOffsets = 5221;  // + 20·(system − 1) + axis
 inline constexpr int kParamTool = 5400;
 inline constexpr int kParamPosition = 5420;
 inline constexpr int kParamMachinePosition = 5021;  // current machine position X…C
+inline constexpr int kParamProbe = 5061;            // G38 trip point X…W, program coordinates
+inline constexpr int kParamProbeTripped = 5070;     // 1: the last G38 move tripped the probe
 // The XY rotation (G10 L2 R, degrees) of a system is its tenth number, after X Y Z A B C U V W:
 // work_param(system, kRotationSlot), #5230 for G54.
 inline constexpr std::size_t kRotationSlot = 9;
@@ -191,6 +193,7 @@ struct Interpreter::Impl final : LiveParameters {
   void execute_stops();
   void line_motion(const AxisVec& target, std::uint32_t col);  // G0 / G1
   void arc(const AxisVec& target, bool ccw, std::uint32_t col);
+  void probe_motion(const AxisVec& target, std::uint32_t col);  // G38.2 … G38.5 (probe.cpp)
   void emit_arc(const AxisVec& target, Vec2 c, bool ccw, std::uint32_t turns, std::uint32_t col);
   void check_arc_travel(const AxisVec& target, Vec2 c, double dr, bool ccw, std::uint32_t turns,
                         std::uint32_t col);

@@ -11,7 +11,7 @@
 namespace cncore::interp {
 
 // G80 G0 G1 G2 G3, and a canned cycle (G73 G74 G81…G89: ModalState::cycle holds which).
-enum class Motion : std::uint8_t { kNone, kRapid, kLine, kArcCw, kArcCcw, kCycle };
+enum class Motion : std::uint8_t { kNone, kRapid, kLine, kArcCw, kArcCcw, kCycle, kProbe };
 
 // Group 5: what F means. G93: the move takes 1/F minutes (an F on every feed move's line);
 // G94: mm (or inch) per minute; G95: mm (or inch) per spindle revolution, at the last S.
@@ -32,6 +32,7 @@ struct ModalState {
   // height, G99: to R), and the words that stay in force from one cycle block to the next, as
   // written (program units; R and Z relative in G91).
   int cycle = 0;
+  int probe_code = 382;  // kProbe: G38.2 … G38.5 as 382 … 385
   bool retract_to_r = false;
   double cycle_r = 0, cycle_z = 0, cycle_p = 0, cycle_q = 0;
   bool cycle_r_set = false, cycle_z_set = false;

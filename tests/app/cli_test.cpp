@@ -501,6 +501,33 @@ TEST_F(Cli, VariablesParametersAndInchesReachTheTrajectory) {
   EXPECT_FALSE(fs::exists(dir_ / "t2.csv"));
 }
 
+TEST_F(Cli, ProbeMoveEndsOnTheConfiguredSurfaceInTheTrajectory) {
+  // A plate whose top is at Z −3.5: the executed probe move stops there, and the retract after
+  // it reads the trip point from #5063.
+  write_file(dir_ / "m.toml", "[probe]\nboxes = [[-50, -50, -20, 50, 50, -3.5]]\n");
+  write_file(dir_ / "p.ngc", "G21 G90 G0 Z5\nG38.2 Z-10 F200\nG0 X1 Z[#5063 + 2]\nM30\n");
+  const Result r = run("run p.ngc --machine m.toml --trajectory t.csv");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = read_csv(dir_ / "t.csv");
+  double lowest = 1e9;
+  for (const auto& row : rows) lowest = std::min(lowest, row.at("z"));
+  EXPECT_NEAR(lowest, -3.5, 1e-6);
+  EXPECT_NEAR(rows.back().at("z"), -1.5, 1e-6);
+  EXPECT_NEAR(rows.back().at("x"), 1, 1e-6);
+  // Bad [probe] boxes name the key; a probe that meets nothing is an error at its line.
+  write_file(dir_ / "bad.toml", "[probe]\nboxes = [[0, 0, 0, 1, 1]]\n");
+  const Result b = run("machine --machine bad.toml");
+  EXPECT_EQ(b.code, 1);
+  EXPECT_EQ(b.err.rfind("bad.toml:2:1: error: probe.boxes[0] must be an array of 6 numbers", 0), 0u)
+      << b.err;
+  write_file(dir_ / "miss.ngc", "G21 G90 G0 X100 Z5\nG38.2 Z-10 F200\nM30\n");
+  const Result miss = run("run miss.ngc --machine m.toml --trajectory miss.csv");
+  EXPECT_EQ(miss.code, 1);
+  EXPECT_EQ(miss.err.rfind("miss.ngc:2:1: error: G38.2: the move ended without contact", 0), 0u)
+      << miss.err;
+  EXPECT_FALSE(fs::exists(dir_ / "miss.csv"));
+}
+
 TEST_F(Cli, StopModeIsSlowerThanLookahead) {
   const Result a = run("run " + example("seed-line-arc-line.ngc") + " --summary a.json");
   const Result b =
