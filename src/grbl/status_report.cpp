@@ -85,6 +85,12 @@ std::string motion_word(const interp::ModalState& p) {
       return "G3";
     case interp::Motion::kCycle:
       return fmt::format("G{}", p.cycle / 10);
+    case interp::Motion::kCubicSpline:
+      return "G5";
+    case interp::Motion::kQuadSpline:
+      return "G5.1";
+    case interp::Motion::kNurbs:
+      return "G5.2";
     case interp::Motion::kNone:
       break;
   }
