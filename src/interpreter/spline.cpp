@@ -161,10 +161,17 @@ class ArcFitter {
   // The piece [ta, tb] from the current end, leaving along tin_: a biarc, else halves, else a line.
   void piece(double ta, double tb, int depth) {
     const Vec3 a = c_.point(ta), b = c_.point(tb);
-    if (norm(b - a) < 1e-9) return;
+    const double mid = 0.5 * (ta + tb);
+    if (norm(b - a) < 1e-9) {
+      // A closed loop ends where it starts: its halves do not.
+      if (depth < kMaxDepth && norm(c_.point(mid) - a) >= 1e-9) {
+        piece(ta, mid, depth + 1);
+        piece(mid, tb, depth + 1);
+      }
+      return;
+    }
     if (biarc(ta, tb, a, b)) return;
     if (depth < kMaxDepth && !straight(ta, tb, a, b)) {
-      const double mid = 0.5 * (ta + tb);
       piece(ta, mid, depth + 1);
       piece(mid, tb, depth + 1);
       return;

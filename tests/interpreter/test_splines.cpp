@@ -242,6 +242,20 @@ TEST(Splines, NurbsOfOrderFourFollowsItsControlPolygonWithinTheTolerance) {
   expect_close(m, "order 4 NURBS");
 }
 
+TEST(Splines, ClosedLoopInIncrementalInchRuns) {
+  // G91: X Y relative to the start, I J P Q always relative; a G5 ending where it starts is a
+  // loop (teardrop) and still runs in full. Inch: every offset times 25.4.
+  const auto b = moves("G20 G90 G17 G0 X1 Y1\nG91 G5 X0 Y0 I2 J1 P2 Q-1 F50\n");
+  const double in = 25.4;
+  const Vec3 s{in, in, 0};
+  const auto m = measure(b, 1, [&](double t) {
+    return cubic(s, s + Vec3{2 * in, in, 0}, s + Vec3{2 * in, -in, 0}, s, t);
+  });
+  expect_close(m, "loop");
+  EXPECT_EQ(b.back().end[kX], in);
+  EXPECT_EQ(b.back().end[kY], in);
+}
+
 TEST(Splines, ErrorsAtTheirLineAndColumn) {
   EXPECT_EQ(
       error_of("G0 X0 Y0\nG5 X10 Y10 I1 J1 P1 F100\n"),
