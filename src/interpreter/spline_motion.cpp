@@ -144,6 +144,10 @@ void Interpreter::Impl::nurbs_point(bool opens, bool have_axes) {
     }
   } else if (w.has('l')) {
     fail(w['l'].col, "L word (the NURBS order) only on the G5.2 line that opens the block");
+  } else if (!nurbs_open_) {
+    // (G5.2 carried over in the modal state of a controller's next MDI line: the points are not.)
+    if (have_axes) fail(w.first_col, "NURBS control point without an open G5.2 block");
+    return;
   }
   const double weight = w.has('p') ? w['p'].value : 1.0;
   if (w.has('p') && !(weight > 0)) fail(w['p'].col, "NURBS weight P must be positive");

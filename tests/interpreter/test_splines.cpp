@@ -286,6 +286,23 @@ TEST(Splines, ErrorsAtTheirLineAndColumn) {
             "s.ngc:1:1: error: no feed rate: program F before the first G1/G2/G3");
 }
 
+TEST(Splines, NurbsPointsDoNotCarryOverToTheNextMdiLine) {
+  // A controller carries the motion mode G5.2 to its next line, not the control points.
+  Options o;
+  o.modal = ModalState{};
+  o.modal->motion = Motion::kNurbs;
+  std::string error;
+  try {
+    Interpreter in(Interpreter::FromText{}, "F100 X1 Y1\n", "m.ngc", test_machine(), o);
+    Block b;
+    while (in.next(b)) {
+    }
+  } catch (const InputError& e) {
+    error = e.formatted();
+  }
+  EXPECT_EQ(error, "m.ngc:1:1: error: NURBS control point without an open G5.2 block");
+}
+
 TEST(LatheDiameterMode, G7ReadsXAsADiameterUntilG8) {
   // G18 lathe: X is the radius axis. In G7, X20 is 10 from the centre (also in G91 and in
   // G92); I stays a radius (LinuxCNC halves X words only); G8 goes back, also for its own block.
