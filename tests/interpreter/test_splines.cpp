@@ -324,15 +324,20 @@ TEST(LatheDiameterMode, G7ReadsXAsADiameterUntilG8) {
 TEST(LatheDiameterMode, PositionsStayRadii) {
   MachineConfig m = test_machine();
   Options o;
-  Interpreter in(Interpreter::FromText{}, "G7 G0 X30\n#1=#5420\nG0 X#1\n", "d.ngc", m, o);
+  Interpreter in(Interpreter::FromText{},
+                 "G7 G0 X30\n#1=#5420\nG0 X#1\nG0 Y#<_lathe_diameter_mode>\n"
+                 "G8\nG0 Z[#<_lathe_radius_mode> * 2]\n",
+                 "d.ngc", m, o);
   std::vector<Block> b;
   Block x;
   while (in.next(x)) {
     if (is_motion(x)) b.push_back(x);
   }
   // #5420 reads 15 (the radius, as LinuxCNC's), and X15 in G7 is 7.5 from the centre.
-  ASSERT_EQ(b.size(), 2U);
+  ASSERT_EQ(b.size(), 4U);
   EXPECT_DOUBLE_EQ(b[1].end[kX], 7.5);
+  EXPECT_DOUBLE_EQ(b[2].end[kY], 1.0);  // #<_lathe_diameter_mode> in G7
+  EXPECT_DOUBLE_EQ(b[3].end[kZ], 2.0);  // #<_lathe_radius_mode> in G8
 }
 
 TEST(LatheDiameterMode, CanonicalListingShowsRadii) {
