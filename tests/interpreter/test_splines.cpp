@@ -18,7 +18,7 @@ namespace {
 constexpr double kTol = 0.01;  // the test machine's contour tolerance (the fit's)
 constexpr double kPi = std::numbers::pi;
 
-std::vector<Block> moves(const std::string& text, MachineConfig m = test_machine()) {
+std::vector<Block> moves(const std::string& text, const MachineConfig& m = test_machine()) {
   Interpreter in(Interpreter::FromText{}, text, "s.ngc", m, Options{});
   std::vector<Block> out;
   Block b;
