@@ -319,7 +319,13 @@ SplineFit fit_arcs(const PlaneSpline& curve, double tolerance_mm, Vec3 start_dir
   ArcFitter fitter(curve, tolerance_mm, out);
   fitter.tin_ = dot(start_dir, start_dir) > 0 ? start_dir : unit_tangent(curve, 0);
   const std::vector<double> b = curve.breaks();
-  for (std::size_t i = 0; i + 1 < b.size(); ++i) fitter.piece(b[i], b[i + 1], 0);
+  for (std::size_t i = 0; i + 1 < b.size(); ++i) {
+    // A knot where the curve itself turns (order 2, a polyline): the next span leaves along its
+    // own tangent, a corner as programmed.
+    const Vec3 t = unit_tangent(curve, b[i]);
+    if (i > 0 && dot(t, fitter.tin_) < std::cos(1e-6)) fitter.tin_ = t;
+    fitter.piece(b[i], b[i + 1], 0);
+  }
   return out;
 }
 

@@ -256,6 +256,23 @@ TEST(Splines, ClosedLoopInIncrementalInchRuns) {
   EXPECT_EQ(b.back().end[kY], in);
 }
 
+TEST(Splines, NurbsOfOrderTwoIsItsControlPolygon) {
+  // Order 2: the B-spline is the polygon itself, corners included: straight blocks on it.
+  const auto b = moves("G21 G90 G17 G0 X0 Y0\nF1000\nG5.2 L2\nX10 Y0\nX10 Y10\nX20 Y10\nG5.3\n");
+  ASSERT_FALSE(b.empty());
+  EXPECT_LE(b.size(), 9U);
+  const std::vector<Vec3> corners{{0, 0, 0}, {10, 0, 0}, {10, 10, 0}, {20, 10, 0}};
+  for (const Block& x : b) {
+    EXPECT_EQ(x.kind, BlockKind::kLine);
+    double best = 1e300;
+    for (std::size_t i = 0; i + 1 < corners.size(); ++i) {
+      best = std::min(best, seg_distance(x.end.xyz(), corners[i], corners[i + 1]));
+    }
+    EXPECT_LT(best, 1e-9);
+  }
+  EXPECT_EQ(b.back().end[kX], 20.0);
+}
+
 TEST(Splines, ErrorsAtTheirLineAndColumn) {
   EXPECT_EQ(
       error_of("G0 X0 Y0\nG5 X10 Y10 I1 J1 P1 F100\n"),
