@@ -6,7 +6,7 @@
 //
 // Programs: the largest files of the shared corpus (CNCORE_SHARED_DIR, skipped when absent)
 // and generated CAM-like programs (3-axis finishing: short G1 moves with 3–4 decimals, some
-// G2/G3 arcs with I/J, comments, F changes) written to a temporary file.
+// G2/G3 arcs with I/J, comments, F changes) written to a temporary file; a chain of G5 splines.
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
 #include <sys/resource.h>
@@ -110,6 +110,31 @@ void BM_Generated(benchmark::State& state) {
 }
 // 100 000 lines first, then 1 000 000: compare their peak_rss_MB.
 BENCHMARK(BM_Generated)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
+
+// A chain of G5 S curves, 20 mm each, every one after the first leaving along the one before
+// (no I J), out along +X and back: the cost of fitting tangent arcs to splines.
+std::string generate_splines(std::size_t lines) {
+  const fs::path path = fs::temp_directory_path() / fmt::format("cncore_bench_g5_{}.ngc", lines);
+  if (fs::exists(path) && fs::file_size(path) > 0) return path.string();
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (f == nullptr) return {};
+  std::fprintf(f, "G21 G90 G17 G64 P0.01\nG0 X-100 Y0 Z0\nF3000\nG91\nG5 X20 Y0 I5 J10 P-5 Q10\n");
+  for (std::size_t i = 1; i < lines; ++i) {
+    const bool out = (i / 10) % 2 == 0;
+    std::fprintf(f, "G5 X%d Y0 P%d Q%d\n", out ? 20 : -20, out ? -5 : 5, i % 2 == 0 ? 10 : -10);
+  }
+  std::fprintf(f, "M30\n");
+  std::fclose(f);
+  return path.string();
+}
+
+void BM_Splines(benchmark::State& state) {
+  run(state, generate_splines(static_cast<std::size_t>(state.range(0))));
+  state.counters["g5_lines_per_s"] = benchmark::Counter(
+      static_cast<double>(state.range(0)) * static_cast<double>(state.iterations()),
+      benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_Splines)->Arg(10000)->Unit(benchmark::kMillisecond);
 
 void BM_Corpus(benchmark::State& state, const char* file) {
   run(state, (fs::path(CNCORE_SHARED_DIR) / "testdata" / "gcode" / file).string());

@@ -87,6 +87,12 @@ std::string motion_word(const interp::ModalState& p) {
       return fmt::format("G{}", p.cycle / 10);
     case interp::Motion::kProbe:
       return fmt::format("G38.{}", p.probe_code - 380);
+    case interp::Motion::kCubicSpline:
+      return "G5";
+    case interp::Motion::kQuadSpline:
+      return "G5.1";
+    case interp::Motion::kNurbs:
+      return "G5.2";
     case interp::Motion::kNone:
       break;
   }

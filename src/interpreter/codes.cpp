@@ -29,12 +29,17 @@ CodeInfo g_code_info(int code10) {
     case 40:
       return ok(GGroup::kNonModal, "dwell");
     case 50:
+      return ok(GGroup::kMotion, "cubic spline");
     case 51:
+      return ok(GGroup::kMotion, "quadratic spline");
     case 52:
-      return no(GGroup::kMotion, "spline interpolation");
+      return ok(GGroup::kMotion, "NURBS block");
+    case 53:
+      return ok(GGroup::kMotion, "end of a NURBS block");
     case 70:
+      return ok(GGroup::kLatheDiameter, "lathe diameter mode");
     case 80:
-      return no(GGroup::kNonModal, "lathe diameter/radius mode");
+      return ok(GGroup::kLatheDiameter, "lathe radius mode");
     case 90:
       return ok(GGroup::kExactStopOnce, "exact stop");
     case 100:

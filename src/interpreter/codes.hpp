@@ -3,7 +3,7 @@
 //
 // Modal groups (at most one word of a group per block; RS274/NGC, LinuxCNC numbering):
 //   G group 0  non-modal      G4 G10 G28 G30 G53 G92 G92.1 G92.2 G92.3
-//   G group 1  motion         G0 G1 G2 G3 G80 (G33 G38.x G73 G76 G81–G89 unsupported)
+//   G group 1  motion         G0 G1 G2 G3 G5 G5.1 G5.2 G5.3 G80 (G33 G38.x G76 unsupported)
 //   G group 2  plane          G17 G18 G19
 //   G group 3  distance       G90 G91
 //   G group 4  arc distance   G90.1 G91.1
@@ -15,6 +15,7 @@
 //   G group 12 coordinate sys G54 G55 G56 G57 G58 G59 G59.1 G59.2 G59.3
 //   G group 13 path control   G61 G61.1 G64
 //   G group 14 spindle mode   G97 (G96 constant surface speed unsupported)
+//   G group 15 lathe X mode   G7 (X words are diameters) G8 (radii)
 //   G9 (exact stop for one block) is non-modal and belongs to no group.
 //   M group 4  stopping       M0 M1 M2 M30 M99
 //   M group 6  tool change    M6
@@ -44,8 +45,9 @@ enum class GGroup : std::uint8_t {
   kPathControl = 13,
   kSpindleMode = 14,
   kExactStopOnce = 15,  // G9: cncore's own slot so it combines with anything
+  kLatheDiameter = 16,  // G7 G8 (LinuxCNC's group 15)
 };
-inline constexpr int kGroupSlots = 16;
+inline constexpr int kGroupSlots = 17;
 
 enum class MGroup : std::uint8_t {
   kStopping = 4,

@@ -114,6 +114,11 @@ bool Interpreter::Impl::read_live(int number, double& value) const {
 }
 
 bool Interpreter::Impl::read_live_named(std::string_view name, double& value) const {
+  // LinuxCNC's #<_lathe_diameter_mode> (1 in G7) and #<_lathe_radius_mode> (1 in G8).
+  if (name == "_lathe_diameter_mode" || name == "_lathe_radius_mode") {
+    value = modal_.diameter_mode == (name == "_lathe_diameter_mode") ? 1 : 0;
+    return true;
+  }
   const bool abs = name.starts_with("_abs_");
   const std::string_view axis = name.substr(abs ? 5 : 1);
   if (!name.starts_with('_') || axis.size() != 1) return false;

@@ -288,6 +288,7 @@ void Interpreter::Impl::execute_words() {
   const Words& w = words_;
 
   refuse_unsupported();
+  apply_lathe_mode();
 
   // The units of this block: a G20/G21 in the block applies to all its numbers (cncore reads
   // F with them too, so "G20 F10" is 10 in/min).
@@ -393,9 +394,11 @@ void Interpreter::Impl::execute_motion(const Words::Code* nonmodal, bool axes_fo
   const bool arc_mode = modal_.motion == Motion::kArcCw || modal_.motion == Motion::kArcCcw;
   const bool have_centre = w.has('i') || w.has('j') || w.has('k');
   const bool cycle_mode = modal_.motion == Motion::kCycle;
+  const bool spline_ij =
+      modal_.motion == Motion::kCubicSpline || modal_.motion == Motion::kQuadSpline;
   if (!arc_mode) {
     for (char c : {'i', 'j', 'k', 'r'}) {
-      if (w.has(c) && !(c == 'r' && (nm == 100 || cycle_mode))) {
+      if (w.has(c) && !(c == 'r' && (nm == 100 || cycle_mode)) && !(spline_ij && c != 'r')) {
         fail(w[c].col, fmt::format("{} word without G2/G3", static_cast<char>(c - 'a' + 'A')));
       }
     }
@@ -412,6 +415,7 @@ void Interpreter::Impl::execute_motion(const Words::Code* nonmodal, bool axes_fo
       }
       if (!modal_.absolute) fail(nonmodal->col, "G53 cannot be used in incremental mode G91");
     }
+    if (spline_motion(motion_word, have_axes, col)) return;
     const bool cycle_words = cycle_mode && (w.has('r') || motion_word != nullptr);
     if (have_axes || (arc_mode && (have_centre || w.has('r'))) || cycle_words) {
       if (modal_.motion == Motion::kNone) {
@@ -564,6 +568,7 @@ void Interpreter::Impl::set_motion_mode(int code10) {
       modal_.motion = Motion::kArcCcw;
       break;
     case 800:
+    case 53:  // G5.3 closes a NURBS block (spline_motion.cpp)
       modal_.motion = Motion::kNone;
       break;
     case 382:
@@ -572,6 +577,15 @@ void Interpreter::Impl::set_motion_mode(int code10) {
     case 385:
       modal_.motion = Motion::kProbe;
       modal_.probe_code = code10;
+      break;
+    case 50:
+      modal_.motion = Motion::kCubicSpline;
+      break;
+    case 51:
+      modal_.motion = Motion::kQuadSpline;
+      break;
+    case 52:
+      modal_.motion = Motion::kNurbs;
       break;
     default:
       modal_.motion = Motion::kCycle;

@@ -20,6 +20,8 @@
 
 namespace cncore::interp {
 
+class PlaneSpline;
+
 inline constexpr std::size_t kLinearAxes = 3;
 inline constexpr double kZeroMoveMm = 1e-9;  // moves shorter than this are not emitted
 
@@ -227,6 +229,16 @@ struct Interpreter::Impl final : LiveParameters {
     ctx_.fail(col, message);
   }
 
+  // spline_motion.cpp: G5, G5.1, G5.2/G5.3 (true: the block was a spline's)
+  bool spline_motion(const Words::Code* motion_word, bool have_axes, std::uint32_t col);
+  void bezier_spline(bool cubic, std::uint32_t col);
+  void nurbs_point(bool opens, bool have_axes);
+  void nurbs_end(std::uint32_t col);
+  void emit_spline(const PlaneSpline& curve, const AxisVec& target, std::uint32_t col);
+  double spline_tolerance_mm() const;
+  // lathe_mode.cpp: G7/G8, and the X words of the block as radii
+  void apply_lathe_mode();
+
   // canned_cycles.cpp
   void canned_cycle(std::uint32_t col);
   void cycle_move(bool rapid, const AxisVec& target, std::uint32_t col);
@@ -291,6 +303,17 @@ struct Interpreter::Impl final : LiveParameters {
   bool tool_table_given_ = false;  // a table was configured: T of an unlisted tool is an error
   std::uint32_t selected_tool_ = 0;  // T: the tool the next M6 loads
   AxisVec tool_offset_{};            // the active tool length offset (G43…), mm / deg
+
+  // A series of G5: where the last one ended and its second control point's offset P Q from
+  // there (the next G5 without I J starts along −(P, Q)), machine XY, mm.
+  bool g5_chain_ = false;
+  AxisVec g5_end_;
+  Vec3 g5_pq_;
+  // The NURBS being defined between G5.2 and G5.3: control points (the start first), weights.
+  bool nurbs_open_ = false;
+  int nurbs_order_ = 3;
+  std::vector<Vec3> nurbs_ctrl_;
+  std::vector<double> nurbs_weights_;
 
   std::vector<Block> out_;  // blocks of the current line, handed out by next()
   std::size_t out_head_ = 0;

@@ -10,8 +10,21 @@
 
 namespace cncore::interp {
 
-// G80 G0 G1 G2 G3, and a canned cycle (G73 G74 G81…G89: ModalState::cycle holds which).
-enum class Motion : std::uint8_t { kNone, kRapid, kLine, kArcCw, kArcCcw, kCycle, kProbe };
+// G80 G0 G1 G2 G3, a canned cycle (G73 G74 G81…G89: ModalState::cycle holds which), and the
+// splines G5 (cubic), G5.1 (quadratic), G5.2 (a NURBS being defined, until G5.3), and the
+// straight probe G38.2…G38.5 (ModalState::probe_code).
+enum class Motion : std::uint8_t {
+  kNone,
+  kRapid,
+  kLine,
+  kArcCw,
+  kArcCcw,
+  kCycle,
+  kCubicSpline,
+  kQuadSpline,
+  kNurbs,
+  kProbe
+};
 
 // Group 5: what F means. G93: the move takes 1/F minutes (an F on every feed move's line);
 // G94: mm (or inch) per minute; G95: mm (or inch) per spindle revolution, at the last S.
@@ -44,6 +57,7 @@ struct ModalState {
   double spindle_rpm = 0;                     // the last S word
   int tool = 0;                               // T of the last M6 (tool in the spindle)
   int tool_length_code = 490;                 // group 8: G49 (430 G43, 431 G43.1, 432 G43.2)
+  bool diameter_mode = false;                 // group 15: G8 (true: G7, X words are diameters)
 
   double length_unit_mm() const { return inch ? 25.4 : 1.0; }
 };

@@ -14,7 +14,7 @@
 // than the tolerance stays a corner. Turns between shorter chords are the noise of rounded
 // coordinates at the tolerance's scale; whether they lie on a curve is the fit's to decide.
 // From the front of a run the stage takes the longest prefix that one curve fits
-// (planner/curve_fit.hpp: every point of the curve within the tolerance of the chords and every
+// (geometry/curve_fit.hpp: every point of the curve within the tolerance of the chords and every
 // point of the chords within the tolerance of the curve, curve ends on programmed vertices) by
 // doubling its length, then bisecting; a chord no curve fits goes out as programmed. After a
 // curve, the arc that leaves along its end tangent is taken when it fits at least as many
@@ -43,9 +43,14 @@
 #include <vector>
 
 #include "core/block.hpp"
-#include "planner/curve_fit.hpp"
+#include "geometry/curve_fit.hpp"
 
 namespace cncore::planner {
+
+using geometry::CurveFit;
+using geometry::CurveFitLimits;
+using geometry::fit_curve;
+using geometry::fit_tangent_curve;
 
 struct SmoothingSettings {
   double tolerance_mm = 0;  // [motion] smooth_tolerance_mm; ≤ 0: only G64 Q turns it on

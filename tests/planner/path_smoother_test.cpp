@@ -12,7 +12,7 @@
 #include <numbers>
 #include <vector>
 
-#include "planner/curve_fit.hpp"
+#include "geometry/curve_fit.hpp"
 
 namespace cncore::planner {
 namespace {

@@ -1,10 +1,10 @@
-#include "planner/curve_fit.hpp"
+#include "geometry/curve_fit.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 
-namespace cncore::planner {
+namespace cncore::geometry {
 namespace {
 
 // Every vertex within tol of the chord p0 pn, projections strictly increasing inside it (the
@@ -133,4 +133,4 @@ bool fit_curve(std::span<const Vec3> p, const CurveFitLimits& limits, CurveFit& 
   return std::ranges::any_of(kAxes, [&](const Vec3& e) { return fits_circle(p, e, limits, out); });
 }
 
-}  // namespace cncore::planner
+}  // namespace cncore::geometry

@@ -1,7 +1,8 @@
 // One line, circular arc or helix through the first and last of a run of points, accepted only
 // when the polyline through all the points and the curve stay within a tolerance of each other
 // (both ways: every point of either lies within tol of the other). The geometry of path
-// smoothing (planner/path_smoother.hpp); no blocks, no G-code.
+// smoothing (planner/path_smoother.hpp) and of the G5 splines (interpreter/spline.hpp); no
+// blocks, no G-code.
 //
 // The test, for the points p0 … pn and a curve C through p0 and pn: each vertex vi has a curve
 // parameter φi (its angle about the centre, or its projection on a line), strictly increasing,
@@ -21,7 +22,7 @@
 
 #include "core/geometry.hpp"
 
-namespace cncore::planner {
+namespace cncore::geometry {
 
 struct CurveFit {
   enum class Kind : std::uint8_t { kLine, kArc };
@@ -53,4 +54,4 @@ bool fit_curve(std::span<const Vec3> p, const CurveFitLimits& limits, CurveFit& 
 bool fit_tangent_curve(std::span<const Vec3> p, const Vec3& t0, const CurveFitLimits& limits,
                        CurveFit& out);
 
-}  // namespace cncore::planner
+}  // namespace cncore::geometry
