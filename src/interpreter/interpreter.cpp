@@ -55,8 +55,11 @@ bool Interpreter::Impl::next(Block& out) {
   while (out_head_ >= out_.size()) {
     out_.clear();
     out_head_ = 0;
+    comp_from_ = 0;
     if (finished_) return false;
     step();
+    comp_.pass(out_, comp_from_);
+    if (finished_) comp_.finish(out_, ctx_.line, words_.first_col);
   }
   out = out_[out_head_++];
   produced_ = true;
@@ -322,7 +325,8 @@ void Interpreter::Impl::execute_words() {
   }
   // 16 units
   modal_.inch = inch;
-  // 17 G40: cutter compensation is never on, nothing to cancel. 18 tool length offset.
+  // 17 cutter radius compensation, 18 tool length offset.
+  cutter_comp(unit);
   if (const auto* g = w.group(GGroup::kToolLength)) {
     tool_length(*g);
   } else if (w.has('h')) {
@@ -483,7 +487,6 @@ void Interpreter::Impl::refuse_unsupported() const {
       fail(m.col, fmt::format("{} {} is not supported", code_text('M', m.code10), info.name));
     }
   }
-  if (w.has('d')) fail(w['d'].col, "D word: cutter compensation (G41/G42) is not supported");
 }
 
 // Step 10 of the order of execution: M52 adaptive feed control (spec 04), P1 or no P on, P0
