@@ -93,6 +93,7 @@ void CutterComp::start(Side side, double radius_mm, Plane plane) {
 }
 
 void CutterComp::pass(std::vector<Block>& blocks, std::size_t from) {
+  failed_ = false;
   if (!engaged() || from >= blocks.size()) return;
   scratch_.assign(blocks.begin() + static_cast<std::ptrdiff_t>(from), blocks.end());
   blocks.resize(from);
@@ -113,7 +114,16 @@ void CutterComp::finish(std::vector<Block>& blocks, std::uint32_t line, std::uin
   exit_ = false;
 }
 
+void CutterComp::recover() {
+  if (!failed_) return;
+  failed_ = false;
+  pending_ = false;
+  held_.clear();
+  first_ = on_;
+}
+
 void CutterComp::fail(const std::string& message) const {
+  failed_ = true;
   throw InputError(*file_, line_, col_, message);
 }
 

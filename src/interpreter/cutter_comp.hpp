@@ -48,6 +48,9 @@ class CutterComp {
   void stop(std::vector<Block>& blocks, std::uint32_t line, std::uint32_t col);
   // Program end: hands on what is held back; compensation off.
   void finish(std::vector<Block>& blocks, std::uint32_t line, std::uint32_t col);
+  // After an error of its own (Interpreter::recover): the move it could not place and what
+  // waited behind it are dropped; the next move enters again from where the tool is.
+  void recover();
 
  private:
   // One programmed move and its compensated path in the plane (plane coordinates, mm).
@@ -92,8 +95,9 @@ class CutterComp {
   bool first_ = false;  // the entry move is still to come
   // The tool is off the programmed path (from the entry move until the exit move after G40).
   bool exit_ = false;
-  bool pending_ = false;  // move_ is held back
-  AxisVec tool_;          // where the tool is: the end of the last block handed on
+  bool pending_ = false;         // move_ is held back
+  mutable bool failed_ = false;  // the last error was found here
+  AxisVec tool_;                 // where the tool is: the end of the last block handed on
   Move move_;
   std::vector<Block> held_;           // blocks after move_ without motion in the plane
   std::vector<Block> scratch_;        // the blocks being passed

@@ -75,6 +75,7 @@ bool Interpreter::Impl::recover() {
     beyond_travel_ = true;
   }
   travel_failed_ = false;
+  comp_.recover();
   out_.clear();
   out_head_ = 0;
   words_.clear();

@@ -272,5 +272,31 @@ TEST(CutterComp, PlungeBetweenMovesStaysAtTheCorner) {
   EXPECT_NEAR(blocks[4].end[kY], 0, 1e-12);
 }
 
+// `cncore check` goes on after a gouge: the move that could not be placed is dropped, the next
+// one enters again, and a later error is still found at its own line.
+TEST(CutterComp, CheckingContinuesAfterAGouge) {
+  Interpreter in(Interpreter::FromText{},
+                 "G21 F100\nG0 X-10 Y0\nG41.1 D6\nG1 X0\nX40\nY2\nX0\nY20\nX-20\nG40\n"
+                 "G1 X#<nope>\nM2\n",
+                 "comp.ngc", test_machine(), Options{});
+  std::vector<std::uint32_t> error_lines;
+  std::vector<Block> moves;
+  for (;;) {
+    try {
+      Block b;
+      if (!in.next(b)) break;
+      if (is_motion(b)) moves.push_back(b);
+    } catch (const InputError& e) {
+      error_lines.push_back(e.line());
+      if (!in.recover()) break;
+    }
+  }
+  EXPECT_EQ(error_lines, (std::vector<std::uint32_t>{7, 11}));
+  ASSERT_FALSE(moves.empty());
+  // After line 7 the tool enters again towards (0, 20), and X-20 runs on its left at y = 17.
+  EXPECT_NEAR(moves.back().end[kX], -20, 1e-9);
+  EXPECT_NEAR(moves.back().end[kY], 17, 1e-9);
+}
+
 }  // namespace
 }  // namespace cncore::interp::test
