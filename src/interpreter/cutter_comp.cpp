@@ -258,17 +258,19 @@ void CutterComp::corner(Move& next, std::vector<Block>& out) {
   // The turn at the corner, positive towards the tool's side: an inside corner.
   const double turn = sign_ * std::atan2(cross(t1, t2), dot(t1, t2));
   bool inside = turn > kTangentRad;
+  bool outside = turn < -kTangentRad;
   if (std::fabs(turn) > std::numbers::pi - kTangentRad) {
-    // The path reverses: the tool goes round the end, except after an arc it is outside of,
-    // where it stays on its side of the arc (LinuxCNC's "h" shape).
-    inside = move_.arc && move_.ccw != (sign_ > 0);
+    // The path reverses: the tool goes round the end, except next to an arc it is outside
+    // of, where it stays on its side of the arc (LinuxCNC's "h" shape).
+    inside = (move_.arc && move_.ccw != (sign_ > 0)) || (next.arc && next.ccw != (sign_ > 0));
+    outside = !inside;
   }
   if (inside) {
     const Vec2 q = inside_corner(move_, next);
     move_.e = q;
     next.s = q;
     release(out);
-  } else if (turn < -kTangentRad) {
+  } else if (outside) {
     release(out);
     if (next.block.kind == BlockKind::kRapid) {
       next.s = plane_of(tool_);

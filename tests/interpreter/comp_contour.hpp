@@ -101,6 +101,7 @@ inline Foot foot_on(const Piece& p, P2 q) {
   f.at = {p.c.a + r * std::cos(aq), p.c.b + r * std::sin(aq)};
   f.distance = std::fabs(std::hypot(q.a - p.c.a, q.b - p.c.b) - r);
   f.tangent = p.ccw ? P2{-std::sin(aq), std::cos(aq)} : P2{std::sin(aq), -std::cos(aq)};
+  f.at_end = along < 1e-9 || along > sweep - 1e-9;  // the side is not defined there
   return f;
 }
 

@@ -298,5 +298,18 @@ TEST(CutterComp, CheckingContinuesAfterAGouge) {
   EXPECT_NEAR(moves.back().end[kY], 17, 1e-9);
 }
 
+// Where the path turns back on itself the tool goes round the end on an arc about the
+// programmed point (here up a line, back down round a G2 half circle the tool is inside of, and
+// up and back down again), every sample still one radius from the contour.
+TEST(CutterComp, ReversalsGoRoundTheEnd) {
+  const std::vector<Piece> contour = {line({20, -5}, {20, 0}), arc({20, 0}, {0, 0}, false, {10, 0}),
+                                      line({0, 0}, {0, -10})};
+  const Traced r = run_contour(contour, 17, false, "G42.1 D6");
+  const Measured m = measure(r, contour, 17, false);
+  EXPECT_LT(m.worst_radius_error, 1e-6);
+  EXPECT_EQ(m.wrong_side, 0u);
+  EXPECT_EQ(m.corner_arcs, 2u);
+}
+
 }  // namespace
 }  // namespace cncore::interp::test
