@@ -1,6 +1,7 @@
 // Reading and executing blocks: word parsing, modal-group checks, and the LinuxCNC order of
 // execution within a block. Moves are made in motion.cpp, offsets in offsets.cpp, flow control
-// (O-words, M98/M99) in flow.cpp, the arc geometry in arcs.cpp.
+// (O-words, M98/M99) in flow.cpp, the arc geometry in arcs.cpp; every line's blocks pass through
+// cutter radius compensation (cutter_comp.cpp).
 #include "interpreter/interpreter.hpp"
 
 #include <fmt/format.h>

@@ -1,5 +1,6 @@
 // Tools: T (select), M6 (change), M61 (set the tool number), the tool length offsets G43 H,
-// G43.1 (from the axis words), G43.2 (added), G49, and the tool table writes G10 L1/L10/L11.
+// G43.1 (from the axis words), G43.2 (added), G49, the tool table writes G10 L1/L10/L11, and
+// the words of cutter radius compensation G40/G41/G42/G41.1/G42.1 D (its path: cutter_comp.cpp).
 // The table comes from the machine configuration's [[tools]] and the --tool-table file. An
 // offset is applied here, as part of the offset between program and machine coordinates
 // (offset()), so the planner sees machine coordinates of the controlled point.
