@@ -311,5 +311,17 @@ TEST(CutterComp, ReversalsGoRoundTheEnd) {
   EXPECT_EQ(m.corner_arcs, 2u);
 }
 
+// LinuxCNC's own bad/ccomp-arcexit.ngc (CNCORE_SHARED_DIR) fails with the message its first
+// line names: an arc right after G40.
+TEST(CutterComp, LinuxCncArcExitFailsForItsReason) {
+  const std::string path =
+      std::string(CNCORE_SHARED_DIR) + "/testdata/linuxcnc-interp/bad/ccomp-arcexit.ngc";
+  const std::string text = read_text(path);
+  if (text.empty()) GTEST_SKIP() << path << " not found (shared test data absent)";
+  const std::string expected = text.substr(1, text.find('\n') - 1);
+  EXPECT_NE(error_of(text).find("comp.ngc:7:1: error: " + expected), std::string::npos)
+      << error_of(text);
+}
+
 }  // namespace
 }  // namespace cncore::interp::test
