@@ -78,10 +78,13 @@ CodeInfo g_code_info(int code10) {
     case 400:
       return ok(GGroup::kCutterComp, "cutter compensation off");
     case 410:
+      return ok(GGroup::kCutterComp, "cutter compensation left");
     case 411:
+      return ok(GGroup::kCutterComp, "cutter compensation left, diameter from D");
     case 420:
+      return ok(GGroup::kCutterComp, "cutter compensation right");
     case 421:
-      return no(GGroup::kCutterComp, "cutter compensation");
+      return ok(GGroup::kCutterComp, "cutter compensation right, diameter from D");
     case 430:
       return ok(GGroup::kToolLength, "tool length offset");
     case 431:

@@ -9,7 +9,7 @@
 //   G group 4  arc distance   G90.1 G91.1
 //   G group 5  feed mode      G94 (G93 G95 unsupported)
 //   G group 6  units          G20 G21
-//   G group 7  cutter comp.   G40 (G41 G42 unsupported)
+//   G group 7  cutter comp.   G40 G41 G41.1 G42 G42.1
 //   G group 8  tool length    G49 (G43 unsupported)
 //   G group 10 canned return  G98 G99 (accepted, no effect without canned cycles)
 //   G group 12 coordinate sys G54 G55 G56 G57 G58 G59 G59.1 G59.2 G59.3

@@ -1,6 +1,7 @@
 // Reading and executing blocks: word parsing, modal-group checks, and the LinuxCNC order of
 // execution within a block. Moves are made in motion.cpp, offsets in offsets.cpp, flow control
-// (O-words, M98/M99) in flow.cpp, the arc geometry in arcs.cpp.
+// (O-words, M98/M99) in flow.cpp, the arc geometry in arcs.cpp; every line's blocks pass through
+// cutter radius compensation (cutter_comp.cpp).
 #include "interpreter/interpreter.hpp"
 
 #include <fmt/format.h>
@@ -55,8 +56,11 @@ bool Interpreter::Impl::next(Block& out) {
   while (out_head_ >= out_.size()) {
     out_.clear();
     out_head_ = 0;
+    comp_from_ = 0;
     if (finished_) return false;
     step();
+    comp_.pass(out_, comp_from_);
+    if (finished_) comp_.finish(out_, ctx_.line, words_.first_col);
   }
   out = out_[out_head_++];
   produced_ = true;
@@ -72,6 +76,7 @@ bool Interpreter::Impl::recover() {
     beyond_travel_ = true;
   }
   travel_failed_ = false;
+  comp_.recover();
   out_.clear();
   out_head_ = 0;
   words_.clear();
@@ -323,7 +328,8 @@ void Interpreter::Impl::execute_words() {
   }
   // 16 units
   modal_.inch = inch;
-  // 17 G40: cutter compensation is never on, nothing to cancel. 18 tool length offset.
+  // 17 cutter radius compensation, 18 tool length offset.
+  cutter_comp(unit);
   if (const auto* g = w.group(GGroup::kToolLength)) {
     tool_length(*g);
   } else if (w.has('h')) {
@@ -492,7 +498,6 @@ void Interpreter::Impl::refuse_unsupported() const {
       fail(m.col, fmt::format("{} {} is not supported", code_text('M', m.code10), info.name));
     }
   }
-  if (w.has('d')) fail(w['d'].col, "D word: cutter compensation (G41/G42) is not supported");
 }
 
 // Step 10 of the order of execution: M52 adaptive feed control (spec 04), P1 or no P on, P0

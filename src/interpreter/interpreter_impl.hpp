@@ -11,6 +11,7 @@
 #include "config/machine_config.hpp"
 #include "core/block.hpp"
 #include "interpreter/codes.hpp"
+#include "interpreter/cutter_comp.hpp"
 #include "interpreter/expression.hpp"
 #include "interpreter/interpreter.hpp"
 #include "interpreter/lexer.hpp"
@@ -252,6 +253,9 @@ struct Interpreter::Impl final : LiveParameters {
   void change_tool(const Words::Code& m);  // M6, M61
   void tool_length(const Words::Code& g);  // G43, G43.1, G43.2, G49
   void set_tool_data(int l);               // G10 L1, L10, L11
+  // Step 17: G40, G41/G42 [D tool], G41.1/G42.1 D diameter; what cannot run with it on.
+  void cutter_comp(double unit);
+  void refuse_with_comp() const;
   bool read_tool_param(int number, double& value) const;
 
   // flow.cpp
@@ -303,6 +307,10 @@ struct Interpreter::Impl final : LiveParameters {
   bool tool_table_given_ = false;  // a table was configured: T of an unlisted tool is an error
   std::uint32_t selected_tool_ = 0;  // T: the tool the next M6 loads
   AxisVec tool_offset_{};            // the active tool length offset (G43…), mm / deg
+  // Cutter radius compensation: the stage the blocks of each line pass through (from
+  // out_[comp_from_]; the blocks before were made under the mode before this line's G40/G41).
+  CutterComp comp_{&file_};
+  std::size_t comp_from_ = 0;
 
   // A series of G5: where the last one ended and its second control point's offset P Q from
   // there (the next G5 without I J starts along −(P, Q)), machine XY, mm.

@@ -1,5 +1,6 @@
 // Tools: T (select), M6 (change), M61 (set the tool number), the tool length offsets G43 H,
-// G43.1 (from the axis words), G43.2 (added), G49, and the tool table writes G10 L1/L10/L11.
+// G43.1 (from the axis words), G43.2 (added), G49, the tool table writes G10 L1/L10/L11, and
+// the words of cutter radius compensation G40/G41/G42/G41.1/G42.1 D (its path: cutter_comp.cpp).
 // The table comes from the machine configuration's [[tools]] and the --tool-table file. An
 // offset is applied here, as part of the offset between program and machine coordinates
 // (offset()), so the planner sees machine coordinates of the controlled point.
@@ -178,6 +179,69 @@ bool Interpreter::Impl::read_tool_param(int number, double& value) const {
     return true;
   }
   return false;
+}
+
+// Step 17. G41/G42 D: the diameter of tool D in the table (without D, of the tool in the
+// spindle); G41.1/G42.1 D: the diameter itself, in program units. A negative diameter puts the
+// tool on the other side (LinuxCNC). The blocks the line made so far ran under the old mode.
+void Interpreter::Impl::cutter_comp(double unit) {
+  const Words& w = words_;
+  refuse_with_comp();
+  const Words::Code* g = w.group(GGroup::kCutterComp);
+  if (g == nullptr) {
+    if (w.has('d')) fail(w['d'].col, "D word without G41, G42, G41.1 or G42.1");
+    return;
+  }
+  comp_.pass(out_, comp_from_);
+  if (g->code10 == 400) {
+    if (w.has('d')) fail(w['d'].col, "D word with G40");
+    comp_.stop(out_, ctx_.line, g->col);
+    comp_from_ = out_.size();
+    return;
+  }
+  if (comp_.on()) fail(g->col, "cutter radius compensation is already on: program G40 first");
+  double diameter_mm = 0;
+  if (g->code10 == 411 || g->code10 == 421) {
+    if (!w.has('d'))
+      fail(g->col, fmt::format("{} without D (the tool diameter)", code_text('G', g->code10)));
+    diameter_mm = w['d'].value * unit;
+  } else {
+    const bool has_d = w.has('d');
+    diameter_mm = tool_entry(has_d ? w['d'].value : modal_.tool, has_d ? w['d'].col : g->col, "D")
+                      .diameter_mm;
+  }
+  bool left = g->code10 == 410 || g->code10 == 411;
+  if (diameter_mm < 0) left = !left;
+  comp_.start(left ? CutterComp::Side::kLeft : CutterComp::Side::kRight, std::fabs(diameter_mm) / 2,
+              modal_.plane);
+  comp_from_ = out_.size();
+}
+
+// What cannot run while cutter radius compensation is on: a change of plane, a tool change,
+// G28/G30, G53 and the canned cycles.
+void Interpreter::Impl::refuse_with_comp() const {
+  if (!comp_.on()) return;
+  const Words& w = words_;
+  auto refuse = [&](std::uint32_t col, const std::string& what) {
+    fail(col, fmt::format("{} with cutter radius compensation on: program G40 first", what));
+  };
+  if (const auto* g = w.group(GGroup::kPlane); g != nullptr && modal_.plane != comp_.plane()) {
+    refuse(g->col, "change of plane");
+  }
+  if (const auto* m = w.mgroup(MGroup::kToolChange)) refuse(m->col, code_text('M', m->code10));
+  if (const auto* g = w.group(GGroup::kNonModal)) {
+    if (g->code10 == 280 || g->code10 == 300 || g->code10 == 530) {
+      refuse(g->col, code_text('G', g->code10));
+    }
+  }
+  const auto* motion = w.group(GGroup::kMotion);
+  const bool cycle_words = w.has('x') || w.has('y') || w.has('z') || w.has('r');
+  const int code10 = motion != nullptr                                ? motion->code10
+                     : modal_.motion == Motion::kCycle && cycle_words ? modal_.cycle
+                                                                      : 0;
+  if (code10 == 730 || code10 == 740 || (code10 >= 810 && code10 <= 890)) {
+    refuse(motion != nullptr ? motion->col : w.first_col, "a canned cycle");
+  }
 }
 
 }  // namespace cncore::interp
