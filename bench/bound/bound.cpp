@@ -5,6 +5,8 @@
 #include <limits>
 #include <numbers>
 
+#include "jerk_bound.hpp"
+
 namespace cncore::bound {
 
 using testing::PathSegment;
@@ -249,6 +251,10 @@ BoundResult BoundBuilder::finish() {
     u[k] = std::min(u[k], std::sqrt(u[k + 1] * u[k + 1] + 2 * d * s.length));
   }
   if (record_) times_.clear();
+  std::vector<EnvelopePiece> envelope;
+  const bool jerk = lim_.max_jerk_mm_s3 > 0;
+  double amax = lim_.max_accel_mm_s2;
+  if (jerk) envelope.reserve(n);
   bool merge = false;  // the previous Seg was a piece of the same arc
   for (std::size_t k = 0; k < n; ++k) {
     const Seg& s = segs_[k];
@@ -258,6 +264,13 @@ BoundResult BoundBuilder::finish() {
                          : segment_time_s(s.length, u[k], u[k + 1], s.cap, accel_at(s, u[k], false),
                                           accel_at(s, u[k + 1], true));
     r.motion_time_s += t;
+    if (jerk) {
+      const bool line = s.piece == kNoPiece;
+      envelope.push_back({s.length, s.cap, u[k], u[k + 1],
+                          line ? s.accel : accel_at(s, u[k], false),
+                          line ? s.accel : accel_at(s, u[k + 1], true)});
+      amax = std::max(amax, s.accel);  // a rotary-only move's own acceleration
+    }
     if (u[k + 1] == 0) ++r.stops;
     if (record_) {
       if (merge) {
@@ -273,6 +286,8 @@ BoundResult BoundBuilder::finish() {
     }
     merge = s.continues;
   }
+  r.accel_motion_time_s = r.motion_time_s;
+  if (jerk) r.motion_time_s = jerk_motion_time_s(envelope, amax, lim_.max_jerk_mm_s3);
   r.time_s = r.motion_time_s + r.dwell_s;
   return r;
 }

@@ -48,8 +48,9 @@ enum class Model : std::uint8_t {
 };
 
 struct BoundResult {
-  double time_s = 0;  // motion time + dwell time
-  double motion_time_s = 0;
+  double time_s = 0;         // motion time + dwell time
+  double motion_time_s = 0;  // with a jerk limit (Limits::max_jerk_mm_s3 > 0) the jerk-aware bound
+  double accel_motion_time_s = 0;  // the acceleration bound's motion time (jerk ignored)
   double dwell_s = 0;
   double length_mm = 0;      // XYZ path length
   std::size_t segments = 0;  // moving segments
@@ -69,7 +70,9 @@ struct SegmentTime {
   Vec3 start, end;  // XYZ of the block's start and end
 };
 
-// Feed blocks in program order, then finish().
+// Feed blocks in program order, then finish(). With Limits::max_jerk_mm_s3 > 0 the motion time
+// is the jerk-aware bound of jerk_bound.hpp over this bound's speed envelope (segment_times()
+// stay the acceleration bound's).
 class BoundBuilder {
  public:
   explicit BoundBuilder(const testing::Limits& limits, Model model = Model::kCoupled)
