@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "core/block.hpp"
+#include "jerk_bound.hpp"
 #include "limits.hpp"
 #include "path_geometry.hpp"
 
@@ -107,6 +108,13 @@ class BoundBuilder {
   // ā(v) of segment s accelerating (brake = false) or braking.
   double accel_at(const Seg& s, double v, bool brake) const;
   void add_arc_pieces(const testing::PathSegment& sg, Seg s);
+  // The forward and backward passes: u[0] = 0, u[k+1] the speed at the end of segs[k].
+  std::vector<double> node_speeds(const std::vector<Seg>& segs) const;
+  std::vector<EnvelopePiece> envelope(const std::vector<Seg>& segs,
+                                      const std::vector<double>& u) const;
+  // The jerk-aware motion time (jerk_bound.hpp): the envelope, its peaks capped, the passes
+  // again, the valleys rounded.
+  double jerk_motion_time() const;
   testing::Limits lim_;
   Model model_ = Model::kCoupled;
   std::vector<Seg> segs_;

@@ -231,6 +231,51 @@ std::vector<Window> windows(const Envelope& env) {
 
 }  // namespace
 
+std::vector<PeakCap> peak_caps(const std::vector<EnvelopePiece>& pieces, double amax_mm_s2,
+                               double jerk_mm_s3) {
+  std::vector<PeakCap> caps;
+  const Envelope env(pieces);
+  if (env.size() == 0 || jerk_mm_s3 <= 0 || amax_mm_s2 <= 0) return caps;
+  const std::vector<Window> ws = windows(env);
+  const Rise fall{0, amax_mm_s2, jerk_mm_s3};  // Φ0: the speed lost u after a ≥ 0
+  const double h = amax_mm_s2 / jerk_mm_s3 / 8;
+  // Whether a speed v at the peak p with a ≥ 0 there (dir +1; a ≤ 0 and backwards: −1) keeps
+  // v − Φ0(u) ≤ E(x_u) for the points x_u the slowest braking reaches by u, up to the valley.
+  // Larger v only moves x_u on, where E is lower, and checks more points: feasibility is
+  // monotone in v.
+  auto feasible = [&](double p, double valley, double v, int dir) {
+    double u = 0, d = 0;
+    for (int n = 0; n < 6 * 8; ++n) {
+      const double u1 = u + h;
+      if (v - fall.phi(u1) < 0) return true;  // no longer sure to move on
+      d += v * h - (fall.psi(u1) - fall.psi(u));
+      const double x = dir > 0 ? std::min(p + d, valley) : std::max(p - d, valley);
+      if (v > env.value(x) + fall.phi(u1)) return false;
+      u = u1;
+    }
+    return true;
+  };
+  for (std::size_t i = 0; i + 1 < ws.size(); ++i) {
+    const double p = ws[i].p1, top = env.value(p);
+    double cap = 0;
+    for (const int dir : {+1, -1}) {
+      const double valley = dir > 0 ? ws[i + 1].valley : ws[i].valley;
+      if (feasible(p, valley, top, dir)) {
+        cap = top;
+        break;
+      }
+      double lo = 0, hi = top;  // lo feasible, hi not: every v ≥ hi is not
+      for (int it = 0; it < 40 && hi - lo > 1e-9 * top; ++it) {
+        const double mid = (lo + hi) / 2;
+        (feasible(p, valley, mid, dir) ? lo : hi) = mid;
+      }
+      cap = std::max(cap, hi);
+    }
+    if (cap < top * (1 - 1e-9)) caps.push_back({p, cap});
+  }
+  return caps;
+}
+
 double envelope_time_s(const std::vector<EnvelopePiece>& pieces) {
   const Envelope env(pieces);
   return env.size() == 0 ? 0.0 : env.cum_time(env.length());

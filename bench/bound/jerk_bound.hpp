@@ -27,9 +27,8 @@
 //   max(∫_W ds/E, min over cells (T_left(a) + T_right(b))),
 // and the bound is the sum over the windows (each a lower bound of the trajectory's time there).
 //
-// What it leaves out: only the speed's lowest point in each window is rounded; the highest
-// (where the trajectory turns from accelerating to braking, or reaches a cap) is as sharp as
-// in the acceleration bound, so the bound is lower than the true jerk-limited optimum there.
+// Peaks: E's highest points are lowered first by peak_caps() (below); what remains sharp there
+// is what the bound leaves out (the true jerk-limited optimum rounds them more).
 // On one line from rest to rest that reaches the feed and Amax it equals the closed form
 // V/A + A/J + L/V (the rounding at both stops is the whole difference to the acceleration
 // bound, A/J).
@@ -48,6 +47,24 @@ struct EnvelopePiece {
   double u0_mm_s = 0, u1_mm_s = 0;
   double accel_mm_s2 = 0, decel_mm_s2 = 0;
 };
+
+// Speed caps at the peaks of E (the ends of the windows) for jerk-limited motion. At a peak p
+// with acceleration a ≥ 0, the acceleration u later is still ≥ −Jmax·u (and ≥ −Amax), so the
+// speed is ≥ v_p − Φ0(u), Φ0 = Φ with α = 0, and the tool has reached at least p + D(u),
+// D(u) = ∫₀ᵘ (v_p − Φ0). Every point x it has passed by u it passed at a speed ≥ v_p − Φ0(u)
+// and ≤ E(x): so v_p ≤ E(x) + Φ0(u) at x = p + D(u) (x taken no farther than the next
+// valley, where E stops falling). With a ≤ 0 the same holds backwards in time. v_p is at most
+// the larger of the two highest speeds that pass (bisection; the cap is the lowest speed found
+// to fail). The caps hold for every jerk-limited trajectory; the acceleration envelope run again
+// with them is lower around the peaks. (It also levels the envelope sooner after a valley,
+// which shortens the valley's lag: BoundBuilder takes the larger of the bounds with and without
+// the caps.)
+struct PeakCap {
+  double s_mm = 0;  // path position (the sum of the pieces' lengths before it)
+  double cap_mm_s = 0;
+};
+std::vector<PeakCap> peak_caps(const std::vector<EnvelopePiece>& pieces, double amax_mm_s2,
+                               double jerk_mm_s3);
 
 // Lower bound of the motion time (s) of any trajectory under E with |a| ≤ amax_mm_s2 and
 // |jerk| ≤ jerk_mm_s3 along the path; ≥ ∫ds/E.
