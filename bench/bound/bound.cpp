@@ -258,9 +258,11 @@ std::vector<EnvelopePiece> BoundBuilder::envelope(const std::vector<Seg>& segs,
 }
 
 double BoundBuilder::jerk_motion_time() const {
-  const double jerk = lim_.max_jerk_mm_s3;
   double amax = lim_.max_accel_mm_s2;
   for (const Seg& s : segs_) amax = std::max(amax, s.accel);  // a rotary-only move's own
+  // The jerk stage spans T2 = ⌈2·Amax/(Jmax·τ)⌉ cycles whatever a segment's own acceleration:
+  // a rotary-only move accelerating faster than Amax changes its acceleration faster too.
+  const double jerk = lim_.max_jerk_mm_s3 * amax / lim_.max_accel_mm_s2;
   const std::vector<EnvelopePiece> first = envelope(segs_, node_speeds(segs_));
   const std::vector<PeakCap> caps = peak_caps(first, amax, jerk);
   const double plain = jerk_motion_time_s(first, amax, jerk);
