@@ -10,8 +10,8 @@
 #   --no-gbench  skip bench_interpreter / bench_motion
 #   --no-stop    skip the stop-mode runs (stop_s and stop/b left empty)
 #   --accdec T   also pass `--accdec T` to `cncore run` (acc/dec type), when supported
-#   --machine F  run and bound on machine F (e.g. one with a jerk limit: the bound ignores jerk,
-#                so look/b then includes what the jerk stage costs)
+#   --machine F  run and bound on machine F (with a jerk limit the bound is the jerk-aware one,
+#                bench/README.md)
 #   --only RE    run only the programs whose path matches the extended regex RE
 # Environment: CNCORE_SHARED_DIR (default: <repo>/../shared) for the corpus; BENCH_OUT for the
 # output folder (default BUILD_DIR/bench-out); BENCH_TIMEOUT seconds per run (default 300).

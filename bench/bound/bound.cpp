@@ -5,6 +5,8 @@
 #include <limits>
 #include <numbers>
 
+#include "jerk_bound.hpp"
+
 namespace cncore::bound {
 
 using testing::PathSegment;
@@ -219,6 +221,82 @@ double BoundBuilder::accel_at(const Seg& s, double v, bool brake) const {
   return std::max(a, 1e-9 * s.accel);
 }
 
+std::vector<double> BoundBuilder::node_speeds(const std::vector<Seg>& segs) const {
+  const std::size_t n = segs.size();
+  // Node speeds: u[0] = 0 (start), u[k+1] = joint at the end of segment k.
+  std::vector<double> u(n + 1);
+  u[0] = 0;
+  for (std::size_t k = 0; k < n; ++k) u[k + 1] = segs[k].join;
+  // Forward pass: reachable from the previous node by accelerating along segment k.
+  // (ā evaluated at the entry speed bounds the whole piece: see bound.hpp.)
+  for (std::size_t k = 0; k < n; ++k) {
+    const Seg& s = segs[k];
+    const double a = accel_at(s, u[k], false);
+    u[k + 1] = std::min({u[k + 1], s.cap, std::sqrt(u[k] * u[k] + 2 * a * s.length)});
+    if (k + 1 < n) u[k + 1] = std::min(u[k + 1], segs[k + 1].cap);
+  }
+  // Backward pass: able to brake to the next node.
+  for (std::size_t k = n; k-- > 0;) {
+    const Seg& s = segs[k];
+    const double d = accel_at(s, u[k + 1], true);
+    u[k] = std::min(u[k], std::sqrt(u[k + 1] * u[k + 1] + 2 * d * s.length));
+  }
+  return u;
+}
+
+std::vector<EnvelopePiece> BoundBuilder::envelope(const std::vector<Seg>& segs,
+                                                  const std::vector<double>& u) const {
+  std::vector<EnvelopePiece> e;
+  e.reserve(segs.size());
+  for (std::size_t k = 0; k < segs.size(); ++k) {
+    const Seg& s = segs[k];
+    const bool line = s.piece == kNoPiece;
+    e.push_back({s.length, s.cap, u[k], u[k + 1], line ? s.accel : accel_at(s, u[k], false),
+                 line ? s.accel : accel_at(s, u[k + 1], true)});
+  }
+  return e;
+}
+
+double BoundBuilder::jerk_motion_time() const {
+  double amax = lim_.max_accel_mm_s2;
+  for (const Seg& s : segs_) amax = std::max(amax, s.accel);  // a rotary-only move's own
+  // The jerk stage spans T2 = ⌈2·Amax/(Jmax·τ)⌉ cycles whatever a segment's own acceleration:
+  // a rotary-only move accelerating faster than Amax changes its acceleration faster too.
+  const double jerk = lim_.max_jerk_mm_s3 * amax / lim_.max_accel_mm_s2;
+  const std::vector<EnvelopePiece> first = envelope(segs_, node_speeds(segs_));
+  const std::vector<PeakCap> caps = peak_caps(first, amax, jerk);
+  const double plain = jerk_motion_time_s(first, amax, jerk);
+  if (caps.empty()) return plain;
+  // The segments cut at the peaks, each cut a joint capped at the peak's speed; the passes
+  // again with those caps.
+  std::vector<Seg> cut;
+  cut.reserve(segs_.size() + caps.size());
+  double s0 = 0;
+  std::size_t c = 0;
+  for (const Seg& sg : segs_) {
+    Seg rest = sg;
+    double at = s0;
+    const double end = s0 + sg.length;
+    for (; c < caps.size() && caps[c].s_mm < end; ++c) {
+      if (caps[c].s_mm <= at) {  // on the joint before
+        if (!cut.empty()) cut.back().join = std::min(cut.back().join, caps[c].cap_mm_s);
+        continue;
+      }
+      Seg first_part = rest;
+      first_part.length = caps[c].s_mm - at;
+      first_part.join = caps[c].cap_mm_s;
+      cut.push_back(first_part);
+      rest.length -= first_part.length;
+      at = caps[c].s_mm;
+    }
+    cut.push_back(rest);
+    s0 = end;
+  }
+  // Both are lower bounds; either may be the higher (a lower peak also ends the valleys' lag
+  // sooner).
+  return std::max(plain, jerk_motion_time_s(envelope(cut, node_speeds(cut)), amax, jerk));
+}
+
 BoundResult BoundBuilder::finish() {
   BoundResult r;
   r.dwell_s = dwell_s_;
@@ -230,24 +308,7 @@ BoundResult BoundBuilder::finish() {
     return r;
   }
   segs_.back().join = 0;
-  // Node speeds: u[0] = 0 (start), u[k+1] = joint at the end of segment k.
-  std::vector<double> u(n + 1);
-  u[0] = 0;
-  for (std::size_t k = 0; k < n; ++k) u[k + 1] = segs_[k].join;
-  // Forward pass: reachable from the previous node by accelerating along segment k.
-  // (ā evaluated at the entry speed bounds the whole piece: see bound.hpp.)
-  for (std::size_t k = 0; k < n; ++k) {
-    const Seg& s = segs_[k];
-    const double a = accel_at(s, u[k], false);
-    u[k + 1] = std::min({u[k + 1], s.cap, std::sqrt(u[k] * u[k] + 2 * a * s.length)});
-    if (k + 1 < n) u[k + 1] = std::min(u[k + 1], segs_[k + 1].cap);
-  }
-  // Backward pass: able to brake to the next node.
-  for (std::size_t k = n; k-- > 0;) {
-    const Seg& s = segs_[k];
-    const double d = accel_at(s, u[k + 1], true);
-    u[k] = std::min(u[k], std::sqrt(u[k + 1] * u[k + 1] + 2 * d * s.length));
-  }
+  const std::vector<double> u = node_speeds(segs_);
   if (record_) times_.clear();
   bool merge = false;  // the previous Seg was a piece of the same arc
   for (std::size_t k = 0; k < n; ++k) {
@@ -273,6 +334,8 @@ BoundResult BoundBuilder::finish() {
     }
     merge = s.continues;
   }
+  r.accel_motion_time_s = r.motion_time_s;
+  if (lim_.max_jerk_mm_s3 > 0) r.motion_time_s = jerk_motion_time();
   r.time_s = r.motion_time_s + r.dwell_s;
   return r;
 }

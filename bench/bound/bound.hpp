@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "core/block.hpp"
+#include "jerk_bound.hpp"
 #include "limits.hpp"
 #include "path_geometry.hpp"
 
@@ -48,8 +49,9 @@ enum class Model : std::uint8_t {
 };
 
 struct BoundResult {
-  double time_s = 0;  // motion time + dwell time
-  double motion_time_s = 0;
+  double time_s = 0;         // motion time + dwell time
+  double motion_time_s = 0;  // with a jerk limit (Limits::max_jerk_mm_s3 > 0) the jerk-aware bound
+  double accel_motion_time_s = 0;  // the acceleration bound's motion time (jerk ignored)
   double dwell_s = 0;
   double length_mm = 0;      // XYZ path length
   std::size_t segments = 0;  // moving segments
@@ -69,7 +71,9 @@ struct SegmentTime {
   Vec3 start, end;  // XYZ of the block's start and end
 };
 
-// Feed blocks in program order, then finish().
+// Feed blocks in program order, then finish(). With Limits::max_jerk_mm_s3 > 0 the motion time
+// is the jerk-aware bound of jerk_bound.hpp over this bound's speed envelope (segment_times()
+// stay the acceleration bound's).
 class BoundBuilder {
  public:
   explicit BoundBuilder(const testing::Limits& limits, Model model = Model::kCoupled)
@@ -104,6 +108,13 @@ class BoundBuilder {
   // ā(v) of segment s accelerating (brake = false) or braking.
   double accel_at(const Seg& s, double v, bool brake) const;
   void add_arc_pieces(const testing::PathSegment& sg, Seg s);
+  // The forward and backward passes: u[0] = 0, u[k+1] the speed at the end of segs[k].
+  std::vector<double> node_speeds(const std::vector<Seg>& segs) const;
+  std::vector<EnvelopePiece> envelope(const std::vector<Seg>& segs,
+                                      const std::vector<double>& u) const;
+  // The jerk-aware motion time (jerk_bound.hpp): the envelope, its peaks capped, the passes
+  // again, the valleys rounded.
+  double jerk_motion_time() const;
   testing::Limits lim_;
   Model model_ = Model::kCoupled;
   std::vector<Seg> segs_;

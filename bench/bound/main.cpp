@@ -1,7 +1,9 @@
 // cncore-bound: the time-optimal lower bound of a part program on a machine (see bound.hpp).
 //   cncore-bound PROGRAM.ngc [--machine FILE.toml] [--override PCT] [--json]
-// Prints "bound_s=… motion_s=… dwell_s=… length_mm=… segments=… stops=… blocks=…" (or one JSON
-// object). Exit codes: 0 ok, 1 bad program or machine file (FILE:LINE:COL: error: …), 2 usage.
+// Prints "bound_s=… motion_s=… dwell_s=… length_mm=… segments=… stops=… blocks=… accel_only_s=…"
+// (or one JSON object). With a jerk limit in the machine (`[motion] max_jerk_mm_s3`) bound_s is
+// the jerk-aware bound (jerk_bound.hpp) and accel_only_s the bound without it (--no-jerk: jerk
+// ignored). Exit codes: 0 ok, 1 bad program or machine file (FILE:LINE:COL: error: …), 2 usage.
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
@@ -20,6 +22,7 @@ int main(int argc, char** argv) {
   std::string per_block_file;
   std::string model_name = "coupled";
   double resultant_mm_s2 = 0;
+  bool no_jerk = false;
   app.add_option("program", program, "part program (G-code)")->required();
   app.add_option("--machine", machine_file, "machine configuration (TOML); built-in if absent");
   app.add_option("--override", override_pct, "constant feed override in % (scales F, not Vmax)")
@@ -33,6 +36,9 @@ int main(int argc, char** argv) {
                  "also bound the resultant acceleration on arcs (mm/s², coupled model; 0: off, "
                  "as the checker by default)")
       ->check(CLI::Range(0.0, 1e9));
+  app.add_flag("--no-jerk", no_jerk,
+               "ignore the machine's jerk limit (the acceleration bound; with a jerk limit the "
+               "bound also keeps |jerk| <= max_jerk_mm_s3 along the path)");
   app.add_option("--per-block", per_block_file,
                  "write one TSV row per moving segment: line, kind, length, caps, joint speeds, "
                  "time");
@@ -45,6 +51,7 @@ int main(int argc, char** argv) {
     const cncore::MachineConfig machine = cncore::machine_config_or_default(machine_file);
     cncore::testing::Limits lim = cncore::testing::limits_from_config(machine);
     lim.max_resultant_accel_mm_s2 = resultant_mm_s2;
+    if (no_jerk) lim.max_jerk_mm_s3 = 0;
     cncore::interp::Interpreter in(program, machine, {});
     cncore::bound::BoundBuilder builder(lim, model_name == "simple"
                                                  ? cncore::bound::Model::kSimple
@@ -82,13 +89,15 @@ int main(int argc, char** argv) {
     if (json) {
       std::printf(
           "{\"bound_s\": %.9g, \"motion_s\": %.9g, \"dwell_s\": %.9g, \"length_mm\": %.9g, "
-          "\"segments\": %zu, \"stops\": %zu, \"blocks\": %zu}\n",
-          r.time_s, r.motion_time_s, r.dwell_s, r.length_mm, r.segments, r.stops, blocks);
+          "\"segments\": %zu, \"stops\": %zu, \"blocks\": %zu, \"accel_only_s\": %.9g}\n",
+          r.time_s, r.motion_time_s, r.dwell_s, r.length_mm, r.segments, r.stops, blocks,
+          r.accel_motion_time_s + r.dwell_s);
     } else {
       std::printf(
           "bound_s=%.9g motion_s=%.9g dwell_s=%.9g length_mm=%.9g segments=%zu stops=%zu "
-          "blocks=%zu\n",
-          r.time_s, r.motion_time_s, r.dwell_s, r.length_mm, r.segments, r.stops, blocks);
+          "blocks=%zu accel_only_s=%.9g\n",
+          r.time_s, r.motion_time_s, r.dwell_s, r.length_mm, r.segments, r.stops, blocks,
+          r.accel_motion_time_s + r.dwell_s);
     }
     return 0;
   } catch (const cncore::InputError& e) {
