@@ -114,15 +114,23 @@ void SummaryObserver::on_block(const Block& b) {
 }
 
 // The block under the tool on `line`, matched in order against the blocks handed to the kernel
-// (index into pending_; the ones before it the tool has passed). kNone when unknown.
-std::size_t SummaryObserver::match(std::uint32_t line) const {
-  // Nearly every sample is on the block at the front: no ring indexing then.
-  if (!pending_.empty() && pending_.front().line == line) return 0;
+// (index into pending_; the ones before it the tool has passed). kNone when unknown. Where one
+// line made several blocks (a spline's arcs, compensation's corner arcs, a canned cycle), the
+// tool is on a later one once the nearest point of the earlier one is its end and the later one
+// is no farther.
+std::size_t SummaryObserver::match(std::uint32_t line, Vec3 pos) const {
   const std::size_t n = std::min(pending_.size(), kMatchWindow);
-  for (std::size_t j = 0; j < n; ++j) {
-    if (pending_[j].line == line) return j;
+  std::size_t j = 0;
+  while (j < n && pending_[j].line != line) ++j;
+  if (j == n) return kNone;
+  while (j + 1 < n && pending_[j + 1].line == line && pending_[j].motion &&
+         pending_[j + 1].motion) {
+    const ProgrammedMove::Nearest here = pending_[j].move.nearest(pos);
+    if (here.along_mm < pending_[j].move.length_mm() - 1e-9) break;
+    if (pending_[j + 1].move.nearest(pos).distance_mm > here.distance_mm + 1e-9) break;
+    ++j;
   }
-  return kNone;
+  return j;
 }
 
 // The blocks before pending_[j] are passed: into the window of recent moves.
@@ -381,16 +389,16 @@ void SummaryObserver::sample(const motion::Sample& s) {
 
   // The programmed block under the tool (kNone: not known); those before it in pending_ the
   // tool has passed since the last sample.
-  const std::size_t j = s.line != 0 ? match(s.line) : kNone;
+  const Vec3 path = s.path_position.xyz();
+  const Vec3 pos = s.position.xyz();  // disabled slots stay 0 in both
+  const std::size_t j = s.line != 0 ? match(s.line, pos) : kNone;
 
   // Contour error: distance from the servo set-point to the path as programmed near the tool
   // (the polyline of recent on-path points when no programmed move is known).
-  const Vec3 path = s.path_position.xyz();
   const std::size_t ring_n = path_ring_.size();
   path_ring_[ring_next_] = path;
   ring_next_ = ring_next_ + 1 == ring_n ? 0 : ring_next_ + 1;
   ring_size_ = std::min(ring_size_ + 1, ring_n);
-  const Vec3 pos = s.position.xyz();  // disabled slots stay 0 in both
   const Vec3 lag = pos - path;
   const double lag2 = dot(lag, lag);
   // The set-point on the path with a path speed from the kernel (a recorded trajectory or a

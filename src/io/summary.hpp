@@ -159,7 +159,7 @@ class SummaryObserver : public sim::SampleObserver {
     double t_s;
   };
   static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
-  std::size_t match(std::uint32_t line) const;
+  std::size_t match(std::uint32_t line, Vec3 pos) const;
   void share(const motion::Sample& s, std::size_t j, double dt_s, double len_mm);
   void credit(Pending& b, double dt_s, double len_mm, const motion::Sample& s);
   void pass(std::size_t j, double t_s);

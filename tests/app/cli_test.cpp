@@ -528,6 +528,17 @@ TEST_F(Cli, ProbeMoveEndsOnTheConfiguredSurfaceInTheTrajectory) {
   EXPECT_FALSE(fs::exists(dir_ / "miss.csv"));
 }
 
+TEST_F(Cli, ALineOfManyBlocksIsMeasuredAgainstEachOfThem) {
+  // One G5 line becomes 26 arcs: the contour error is measured against the arc under the tool,
+  // not only against the first ones of the line.
+  write_file(dir_ / "s.ngc", "G21 G90 G0 X0 Y0\nG5 X60 Y20 I30 J40 P-10 Q-50 F6000\nM2\n");
+  const Result r = run("run s.ngc --summary s.json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(slurp(dir_ / "s.json"));
+  EXPECT_LE(j.at("max_contour_error_mm").get<double>(), 0.01);
+  EXPECT_GT(j.at("blocks").get<int>(), 10);
+}
+
 TEST_F(Cli, StopModeIsSlowerThanLookahead) {
   const Result a = run("run " + example("seed-line-arc-line.ngc") + " --summary a.json");
   const Result b =
