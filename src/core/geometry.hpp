@@ -29,6 +29,11 @@ constexpr Vec3 cross(Vec3 a, Vec3 b) {
 inline double norm(Vec3 a) {
   return std::sqrt(dot(a, a));
 }
+// v / |v|, or the zero vector for a vector of no length.
+inline Vec3 unit_or_zero(Vec3 v) {
+  const double n = norm(v);
+  return n > 0 ? (1 / n) * v : Vec3{};
+}
 // Component i (0: x, 1: y, 2: z) of v.
 constexpr double component(const Vec3& v, std::size_t i) {
   return i == 0 ? v.x : (i == 1 ? v.y : v.z);

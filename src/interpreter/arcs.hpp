@@ -6,6 +6,7 @@
 // normal axis, and G2 turns negatively. All lengths here are mm.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -13,7 +14,20 @@ namespace cncore::interp {
 
 struct Vec2 {
   double a = 0, b = 0;  // (first, second) plane coordinates
+
+  friend Vec2 operator+(Vec2 p, Vec2 q) { return {p.a + q.a, p.b + q.b}; }
+  friend Vec2 operator-(Vec2 p, Vec2 q) { return {p.a - q.a, p.b - q.b}; }
+  friend Vec2 operator*(double k, Vec2 p) { return {k * p.a, k * p.b}; }
 };
+inline double dot(Vec2 p, Vec2 q) {
+  return p.a * q.a + p.b * q.b;
+}
+inline double cross(Vec2 p, Vec2 q) {  // z of the 3-D cross product
+  return p.a * q.b - p.b * q.a;
+}
+inline double norm(Vec2 p) {
+  return std::hypot(p.a, p.b);
+}
 
 enum class Plane : std::uint8_t { kXY, kZX, kYZ };
 

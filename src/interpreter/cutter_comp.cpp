@@ -19,25 +19,6 @@ constexpr double kTangentRad = 0.01;
 // (mm along the arc; LinuxCNC allows 0.001 in).
 constexpr double kSweepSlackMm = 0.0254;
 
-Vec2 operator-(Vec2 p, Vec2 q) {
-  return {p.a - q.a, p.b - q.b};
-}
-Vec2 operator+(Vec2 p, Vec2 q) {
-  return {p.a + q.a, p.b + q.b};
-}
-Vec2 operator*(double k, Vec2 p) {
-  return {k * p.a, k * p.b};
-}
-double dot(Vec2 p, Vec2 q) {
-  return p.a * q.a + p.b * q.b;
-}
-double cross(Vec2 p, Vec2 q) {
-  return p.a * q.b - p.b * q.a;
-}
-double norm(Vec2 p) {
-  return std::hypot(p.a, p.b);
-}
-
 // Lines p + t·u and q + s·v (u, v unit): p + t·u with t = ((q − p) × v) / (u × v).
 bool line_line(Vec2 p, Vec2 u, Vec2 q, Vec2 v, Vec2& x) {
   const double den = cross(u, v);
@@ -75,10 +56,6 @@ bool circle_circle(Vec2 c1, double r1, Vec2 c2, double r2, Vec2 near, Vec2& x) {
   const Vec2 x2 = m - h * n;
   x = norm(x1 - near) <= norm(x2 - near) ? x1 : x2;
   return true;
-}
-
-double axis_of(const Vec3& v, std::size_t axis) {
-  return axis == 0 ? v.x : axis == 1 ? v.y : v.z;
 }
 
 }  // namespace
@@ -214,7 +191,7 @@ CutterComp::Move CutterComp::programmed(const Block& b) const {
     AxisVec c;
     c.set_xyz(b.center);
     m.c = plane_of(c);
-    m.ccw = axis_of(b.normal, pa_.normal) > 0;
+    m.ccw = component(b.normal, pa_.normal) > 0;
     m.sweep_rad = arc_sweep(m.ps, m.pe, m.c, m.ccw, b.turns);
   } else {
     m.dir = (1 / norm(m.pe - m.ps)) * (m.pe - m.ps);

@@ -14,43 +14,34 @@ namespace cncore::interp {
 
 namespace {
 
-struct Box {
-  Vec3 lo, hi;
-};
-
-std::vector<Box> probe_solids(const MachineConfig& m) {
-  std::vector<Box> solids;
+// The solids as boxes: the stock's (when it is one of them) and the configured ones.
+std::vector<ProbeBox> probe_solids(const MachineConfig& m) {
+  std::vector<ProbeBox> solids;
   const StockConfig& s = m.cutting.stock;
   if (m.probe.touch_stock && s.enabled) {
-    solids.push_back(
-        {{s.min_mm[0], s.min_mm[1], s.min_mm[2]},
-         {s.min_mm[0] + s.size_mm[0], s.min_mm[1] + s.size_mm[1], s.min_mm[2] + s.size_mm[2]}});
+    ProbeBox stock{s.min_mm, s.min_mm};
+    for (std::size_t i = 0; i < 3; ++i) stock.max_mm[i] += s.size_mm[i];
+    solids.push_back(stock);
   }
-  for (const ProbeBox& b : m.probe.boxes) {
-    solids.push_back(
-        {{b.min_mm[0], b.min_mm[1], b.min_mm[2]}, {b.max_mm[0], b.max_mm[1], b.max_mm[2]}});
-  }
+  solids.insert(solids.end(), m.probe.boxes.begin(), m.probe.boxes.end());
   return solids;
 }
 
-double at(const Vec3& v, std::size_t i) {
-  return i == 0 ? v.x : i == 1 ? v.y : v.z;
-}
-
-bool inside(const Box& b, const Vec3& p) {
+bool inside(const ProbeBox& b, const Vec3& p) {
   constexpr double kEps = 1e-9;
   for (std::size_t i = 0; i < 3; ++i) {
-    if (at(p, i) < at(b.lo, i) - kEps || at(p, i) > at(b.hi, i) + kEps) return false;
+    if (component(p, i) < b.min_mm[i] - kEps || component(p, i) > b.max_mm[i] + kEps) return false;
   }
   return true;
 }
 
 // The parameter interval [t0, t1] ⊂ [0, 1] of p(t) = a + t·(b − a) inside `box` (slab method:
 // per axis lo ≤ a + t·d ≤ hi); empty when t0 > t1.
-std::pair<double, double> clip(const Box& box, const Vec3& a, const Vec3& b) {
+std::pair<double, double> clip(const ProbeBox& box, const Vec3& a, const Vec3& b) {
   double t0 = 0, t1 = 1;
   for (std::size_t i = 0; i < 3; ++i) {
-    const double d = at(b, i) - at(a, i), lo = at(box.lo, i), hi = at(box.hi, i), s = at(a, i);
+    const double s = component(a, i), d = component(b, i) - s;
+    const double lo = box.min_mm[i], hi = box.max_mm[i];
     if (std::abs(d) < 1e-15) {
       if (s < lo || s > hi) return {1, 0};
       continue;
@@ -65,10 +56,11 @@ std::pair<double, double> clip(const Box& box, const Vec3& a, const Vec3& b) {
 
 // Toward (G38.2/.3): the first t at which the line is inside a solid; away (G38.4/.5): the first
 // t at which it is inside none. Returns > 1 when that never happens on the move.
-double trip_parameter(const std::vector<Box>& solids, const Vec3& a, const Vec3& b, bool toward) {
+double trip_parameter(const std::vector<ProbeBox>& solids, const Vec3& a, const Vec3& b,
+                      bool toward) {
   if (toward) {
     double best = 2;
-    for (const Box& s : solids) {
+    for (const ProbeBox& s : solids) {
       const auto [t0, t1] = clip(s, a, b);
       if (t0 <= t1) best = std::min(best, t0);
     }
@@ -79,7 +71,7 @@ double trip_parameter(const std::vector<Box>& solids, const Vec3& a, const Vec3&
   for (std::size_t guard = 0; guard <= solids.size(); ++guard) {
     const Vec3 p = a + t * (b - a);
     double exit = t;
-    for (const Box& s : solids) {
+    for (const ProbeBox& s : solids) {
       if (!inside(s, p)) continue;
       const auto [t0, t1] = clip(s, a, b);
       if (t0 <= t1) exit = std::max(exit, t1);
@@ -116,12 +108,12 @@ void Interpreter::Impl::probe_motion(const AxisVec& target, std::uint32_t col) {
                           g));
   }
   check_travel(target, target, target, col);
-  const std::vector<Box> solids = probe_solids(machine_);
+  const std::vector<ProbeBox> solids = probe_solids(machine_);
   // The tool tip: the controlled point less the tool length offset.
   const Vec3 a = (pos_ - tool_offset_).xyz();
   const Vec3 b = (target - tool_offset_).xyz();
   const bool in_contact =
-      std::any_of(solids.begin(), solids.end(), [&](const Box& s) { return inside(s, a); });
+      std::any_of(solids.begin(), solids.end(), [&](const ProbeBox& s) { return inside(s, a); });
   if (toward && in_contact) {
     fail(col, fmt::format("{}: the probe is already tripped at the start of the move", g));
   }

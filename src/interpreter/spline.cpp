@@ -20,11 +20,6 @@ constexpr double kMaxRadiusMm = 1e6;
 // arcs are fitted to the rest.
 constexpr double kSagShare = 0.1;
 
-Vec3 unit(Vec3 v) {
-  const double n = norm(v);
-  return n > 0 ? (1 / n) * v : Vec3{};
-}
-
 // The signed turn about +Z from a to b (radians, (−π, π]).
 double turn_z(Vec3 a, Vec3 b) {
   return std::atan2(cross(a, b).z, dot(a, b));
@@ -147,9 +142,10 @@ namespace {
 // direction of a short chord there.
 Vec3 unit_tangent(const PlaneSpline& c, double t) {
   const Vec3 d = c.derivative(t);
-  if (norm(d) > 1e-12) return unit(d);
+  if (norm(d) > 1e-12) return unit_or_zero(d);
   constexpr double kStep = 1e-6;
-  return t < 0.5 ? unit(c.point(t + kStep) - c.point(t)) : unit(c.point(t) - c.point(t - kStep));
+  return t < 0.5 ? unit_or_zero(c.point(t + kStep) - c.point(t))
+                 : unit_or_zero(c.point(t) - c.point(t - kStep));
 }
 
 class ArcFitter {
@@ -264,7 +260,7 @@ class ArcFitter {
 
   // Samples within the tolerance of the chord, which leaves within 1 mrad of tin_.
   bool straight(double ta, double tb, Vec3 a, Vec3 b) {
-    const Vec3 ch = unit(b - a);
+    const Vec3 ch = unit_or_zero(b - a);
     if (dot(ch, tin_) < std::cos(1e-3)) return false;
     sample(ta, tb, a, b);
     return std::ranges::all_of(pts_, [&](const Vec3& p) {
@@ -302,7 +298,7 @@ class ArcFitter {
     grow(b);
     out_.pieces.push_back(p);
     ++out_.lines;
-    tin_ = unit(b - a);
+    tin_ = unit_or_zero(b - a);
   }
 
   const PlaneSpline& c_;

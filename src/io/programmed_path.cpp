@@ -11,11 +11,6 @@ namespace {
 
 constexpr double kTwoPi = 2 * std::numbers::pi;
 
-Vec3 unit_or_zero(Vec3 v) {
-  const double n = norm(v);
-  return n > 0 ? (1 / n) * v : Vec3{};
-}
-
 }  // namespace
 
 ProgrammedMove::ProgrammedMove(const Block& b)

@@ -18,14 +18,9 @@ double deg(double rad) {
   return rad * 180 / std::numbers::pi;
 }
 
-Vec3 unit(Vec3 v) {
-  const double n = norm(v);
-  return n > 0 ? (1 / n) * v : Vec3{};
-}
-
 // Angle of an arc about its normal from start to end, counter-clockwise, in (0, 2π] (+ turns).
 double arc_sweep_rad(const Block& b) {
-  const Vec3 n = unit(b.normal);
+  const Vec3 n = unit_or_zero(b.normal);
   const Vec3 rs = b.start.xyz() - b.center;
   Vec3 re = b.end.xyz() - b.center;
   re = re - dot(re, n) * n;  // remove the helix rise
@@ -37,14 +32,14 @@ double arc_sweep_rad(const Block& b) {
 // Unit tangents (XYZ) at the start and end of a motion block; zero for a pure rotary move.
 std::pair<Vec3, Vec3> tangents(const Block& b) {
   if (b.kind != BlockKind::kArc) {
-    const Vec3 d = unit(b.end.xyz() - b.start.xyz());
+    const Vec3 d = unit_or_zero(b.end.xyz() - b.start.xyz());
     return {d, d};
   }
-  const Vec3 n = unit(b.normal);
+  const Vec3 n = unit_or_zero(b.normal);
   Vec3 re = b.end.xyz() - b.center;
   re = re - dot(re, n) * n;
   // Counter-clockwise about n: the tangent is n × r.
-  return {unit(cross(n, b.start.xyz() - b.center)), unit(cross(n, re))};
+  return {unit_or_zero(cross(n, b.start.xyz() - b.center)), unit_or_zero(cross(n, re))};
 }
 
 void merge_min(double& a, double b) {
@@ -104,7 +99,7 @@ void ReportObserver::on_block(const Block& b) {
   p.cap_mm_min = b.kind == BlockKind::kRapid ? machine_.rapid_mm_min : machine_.max_feed_mm_min;
   p.feed_mm_min = b.kind == BlockKind::kRapid ? machine_.rapid_mm_min : b.feed_mm_min;
   if (b.kind == BlockKind::kArc) {
-    const Vec3 n = unit(b.normal);
+    const Vec3 n = unit_or_zero(b.normal);
     const Vec3 r = b.start.xyz() - b.center;
     p.radius_mm = norm(r - dot(r, n) * n);
     const double rise = dot(b.end.xyz() - b.start.xyz(), n);
