@@ -24,6 +24,12 @@ const io = require(path.join(modules, 'socket.io-client'));
 const jwt = require(path.join(modules, 'jsonwebtoken'));
 
 const fails = [];
+// Under the sanitizers cncore runs several times slower, so times are reported, not bounded.
+const sanitized = Boolean(process.env.CNCORE_SANITIZED);
+function timing(cond, what) {
+  if (sanitized) console.log(`note ${what} (sanitizer build: not bounded)`);
+  else check(cond, what);
+}
 function check(cond, what) {
   console.log((cond ? 'ok   ' : 'FAIL ') + what);
   if (!cond) fails.push(what);
@@ -240,7 +246,7 @@ function analyse(work, traj, p) {
   // CNCjs's own sending, whichever is longer.
   const t1 = motionTime(first);
   const t1run = motionTime(ref);
-  check(t1 <= Math.max(1.05 * t1run, p.sendSeconds + 0.5),
+  timing(t1 <= Math.max(1.05 * t1run, p.sendSeconds + 0.5),
         `…in ${t1.toFixed(3)} s against ${t1run.toFixed(3)} s in run; CNCjs took ` +
         `${p.sendSeconds.toFixed(3)} s to send its lines`);
   check(p.seen.includes('Run') && p.seen[p.seen.length - 1] === 'Idle', `states CNCjs saw: ${p.seen}`);
@@ -254,7 +260,7 @@ function analyse(work, traj, p) {
         `feed override +10 % from CNCjs: ${v.toFixed(0)} mm/min on the F3000 circle`);
   const t36run = motionTime(runTime(work, 'c36000.ngc', circle(36000)));
   const t36 = motionTime(big);
-  check(t36 <= Math.max(1.05 * t36run, p.big.sendSeconds + 0.5),
+  timing(t36 <= Math.max(1.05 * t36run, p.big.sendSeconds + 0.5),
         `36 000-chord circle through CNCjs: ${t36.toFixed(3)} s against ${t36run.toFixed(3)} s in ` +
         `run (${(t36 / t36run).toFixed(3)}x); CNCjs took ${p.big.sendSeconds.toFixed(3)} s to ` +
         `send its lines (the target 1.05x holds when CNCjs sends faster than the tool runs)`);
