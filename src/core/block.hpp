@@ -56,6 +56,10 @@ struct Block {
   // override is ignored on this move (override mode "replace": the speed is F·C alone).
   double correction = std::numeric_limits<double>::quiet_NaN();
   bool override_fixed = false;
+  // Spindle-synchronised motion (G33, G33.1, G76): the path advances sync_mm_rev per spindle
+  // revolution, so feed_mm_min = sync_mm_rev · rpm and override_fixed is set (the feed override
+  // does not act, as in LinuxCNC). 0: a move at its programmed feed.
+  double sync_mm_rev = 0;
 
   // Arc / helix (kArc). The motion turns counter-clockwise about `normal` (right-hand rule):
   // G3 in G17 has normal +Z, G2 in G17 has -Z; G18 uses ±Y, G19 uses ±X.

@@ -135,7 +135,9 @@ bool DirectionCorrector::next(Block& out) {
   Impl& m = *impl_;
   if (!m.pending) return false;
   const Block& b = m.current;
-  if (!m.cfg.enabled || !m.on || !is_feed_move(b) || !std::isnan(b.correction)) {
+  // A move that follows the spindle has its feed from the spindle: not corrected.
+  if (!m.cfg.enabled || !m.on || !is_feed_move(b) || !std::isnan(b.correction) ||
+      b.sync_mm_rev > 0) {
     out = b;
     m.pending = false;
     return true;

@@ -93,6 +93,10 @@ std::string motion_word(const interp::ModalState& p) {
       return "G5.1";
     case interp::Motion::kNurbs:
       return "G5.2";
+    case interp::Motion::kSpindleSync:
+      return "G33";
+    case interp::Motion::kRigidTap:
+      return "G33.1";
     case interp::Motion::kNone:
       break;
   }

@@ -144,7 +144,11 @@ void Interpreter::Impl::canned_cycle(std::uint32_t col) {
                           "turn with the rotation",
                           g, plane_gcode(modal_.plane)));
   }
-  double old_cc = pos_[n];
+  if (!modal_.cycle_initial_set) {
+    modal_.cycle_initial_mm = pos_[n];
+    modal_.cycle_initial_set = true;
+  }
+  double old_cc = modal_.cycle_initial_mm;
   const double r_mm =
       modal_.absolute ? modal_.cycle_r * unit + offset(n) : old_cc + modal_.cycle_r * unit;
   const double bottom_mm =

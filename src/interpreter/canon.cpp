@@ -51,12 +51,21 @@ std::string CanonPrinter::print(const Block& b, const CanonFrame& f) {
     if (per_min != last_feed_) out += fmt::format("SET_FEED_RATE({})\n", num(per_min));
     last_feed_ = per_min;
   };
+  // LinuxCNC: START_SPEED_FEED_SYNC(pitch, velocity mode) before synchronised moves.
+  if (is_motion(b) && b.sync_mm_rev != last_sync_) {
+    if (b.sync_mm_rev > 0) {
+      out += fmt::format("START_SPEED_FEED_SYNC({:.6f},0)\n", b.sync_mm_rev / f.unit_mm);
+    } else {
+      out += "STOP_SPEED_FEED_SYNCH()\n";
+    }
+    last_sync_ = b.sync_mm_rev;
+  }
   switch (b.kind) {
     case BlockKind::kRapid:
       out += fmt::format("STRAIGHT_TRAVERSE({})\n", axes(b.end));
       break;
     case BlockKind::kLine:
-      feed();
+      if (b.sync_mm_rev <= 0) feed();
       out += fmt::format("STRAIGHT_FEED({})\n", axes(b.end));
       break;
     case BlockKind::kArc: {

@@ -67,9 +67,9 @@ CodeInfo g_code_info(int code10) {
     case 301:
       return ok(GGroup::kNonModal, "store the G30 home position");
     case 330:
-      return no(GGroup::kMotion, "spindle-synchronised motion");
+      return ok(GGroup::kMotion, "spindle-synchronised motion");
     case 331:
-      return no(GGroup::kMotion, "rigid tapping");
+      return ok(GGroup::kMotion, "rigid tapping");
     case 382:
     case 383:
     case 384:
@@ -129,6 +129,7 @@ CodeInfo g_code_info(int code10) {
     case 890:
       return ok(GGroup::kMotion, "canned cycle");
     case 760:
+      return ok(GGroup::kMotion, "threading cycle");
     case 870:
       return no(GGroup::kMotion, "canned cycle");
     case 800:
@@ -156,7 +157,7 @@ CodeInfo g_code_info(int code10) {
     case 950:
       return ok(GGroup::kFeedMode, "feed per revolution");
     case 960:
-      return no(GGroup::kSpindleMode, "constant surface speed");
+      return ok(GGroup::kSpindleMode, "constant surface speed");
     case 970:
       return ok(GGroup::kSpindleMode, "spindle RPM mode");
     case 980:

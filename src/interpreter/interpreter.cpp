@@ -130,7 +130,8 @@ void Interpreter::Impl::step() {
 }
 
 // An E word at t[pos]. Right after the digits of an axis or parameter value ("X1e400") it is
-// C's exponent notation, which G-code does not have: say so instead of "unknown word".
+// C's exponent notation, which G-code does not have: say so. Else it is a word (G76's taper
+// length; unknown in any other block, see execute_words).
 void Interpreter::Impl::exponent_or_unknown(std::size_t pos, std::size_t value_start,
                                             char last_letter) const {
   const std::string& t = line_.text;
@@ -148,7 +149,6 @@ void Interpreter::Impl::exponent_or_unknown(std::size_t pos, std::size_t value_s
     fail(line_.col(start), "bad number '" + printable(t.substr(start, e - start)) +
                                "': G-code numbers have no exponent (write the digits out)");
   }
-  fail(line_.col(pos), "unknown word 'E'");
 }
 
 // Size: one pass over the line's characters, one branch per kind of word (letter, parameter
@@ -187,10 +187,11 @@ void Interpreter::Impl::parse_words(std::size_t pos) {
       case 'o':
         fail(col, "O word must be at the start of the line");
       case 'e':
+        exponent_or_unknown(pos, value_start, last_letter);  // G76 reads E; an exponent fails
+        break;
       case 'u':
       case 'v':
       case 'w':
-        if (c == 'e') exponent_or_unknown(pos, value_start, last_letter);
         fail(col, fmt::format("{} axis is not supported (cncore axes: X Y Z A B C)", upper));
       case 'g':
       case 'm': {
@@ -294,6 +295,10 @@ void Interpreter::Impl::execute_words() {
 
   refuse_unsupported();
   apply_lathe_mode();
+  if (w.has('e')) {
+    const Words::Code* m = w.group(GGroup::kMotion);
+    if (m == nullptr || m->code10 != 760) fail(w['e'].col, "unknown word 'E'");
+  }
 
   // The units of this block: a G20/G21 in the block applies to all its numbers (cncore reads
   // F with them too, so "G20 F10" is 10 in/min).
@@ -307,7 +312,10 @@ void Interpreter::Impl::execute_words() {
   if (w.has('t')) select_tool();
   if (const auto* m = w.mgroup(MGroup::kToolChange)) change_tool(*m);
   // 9 spindle
-  if (const auto* m = w.mgroup(MGroup::kSpindle)) emit_aux('M', m->code10 / 10.0, true);
+  if (const auto* m = w.mgroup(MGroup::kSpindle)) {
+    modal_.spindle_dir = m->code10 == 30 ? 1 : m->code10 == 40 ? -1 : 0;
+    emit_aux('M', m->code10 / 10.0, true);
+  }
   // 10 overrides
   adaptive_feed_events();
   // 11 coolant (M7 and M8 may both be present)
@@ -332,7 +340,7 @@ void Interpreter::Impl::execute_words() {
   cutter_comp(unit);
   if (const auto* g = w.group(GGroup::kToolLength)) {
     tool_length(*g);
-  } else if (w.has('h')) {
+  } else if (w.has('h') && !threading_block()) {
     fail(w['h'].col, "H word without G43 or G43.2");
   }
   // 19 coordinate system
@@ -402,9 +410,12 @@ void Interpreter::Impl::execute_motion(const Words::Code* nonmodal, bool axes_fo
   const bool cycle_mode = modal_.motion == Motion::kCycle;
   const bool spline_ij =
       modal_.motion == Motion::kCubicSpline || modal_.motion == Motion::kQuadSpline;
-  if (!arc_mode) {
+  const bool sync_mode = modal_.motion == Motion::kSpindleSync || modal_.motion == Motion::kRigidTap;
+  if (!arc_mode && !threading_block()) {
     for (char c : {'i', 'j', 'k', 'r'}) {
-      if (w.has(c) && !(c == 'r' && (nm == 100 || cycle_mode)) && !(spline_ij && c != 'r')) {
+      const bool sync_word = sync_mode && (c == 'k' || (c == 'i' && modal_.motion == Motion::kRigidTap));
+      if (w.has(c) && !(c == 'r' && (nm == 100 || cycle_mode)) && !(spline_ij && c != 'r') &&
+          !sync_word) {
         fail(w[c].col, fmt::format("{} word without G2/G3", static_cast<char>(c - 'a' + 'A')));
       }
     }
@@ -422,6 +433,11 @@ void Interpreter::Impl::execute_motion(const Words::Code* nonmodal, bool axes_fo
       if (!modal_.absolute) fail(nonmodal->col, "G53 cannot be used in incremental mode G91");
     }
     if (spline_motion(motion_word, have_axes, col)) return;
+    if (threading_block()) {
+      threading_cycle(motion_word->col);
+      modal_.motion = Motion::kNone;  // G76 acts on its own block
+      return;
+    }
     const bool cycle_words = cycle_mode && (w.has('r') || motion_word != nullptr);
     if (have_axes || (arc_mode && (have_centre || w.has('r'))) || cycle_words) {
       if (modal_.motion == Motion::kNone) {
@@ -435,6 +451,10 @@ void Interpreter::Impl::execute_motion(const Words::Code* nonmodal, bool axes_fo
         arc(target, modal_.motion == Motion::kArcCcw, col);
       } else if (modal_.motion == Motion::kProbe) {
         probe_motion(target, col);
+      } else if (modal_.motion == Motion::kSpindleSync) {
+        spindle_sync_motion(target, col);
+      } else if (modal_.motion == Motion::kRigidTap) {
+        rigid_tap(target, col);
       } else {
         line_motion(target, col);
       }
@@ -464,11 +484,7 @@ void Interpreter::Impl::feed_and_speed(double unit) {
     }
     modal_.feed_set = true;
   }
-  if (w.has('s')) {
-    if (w['s'].value < 0) fail(w['s'].col, "negative spindle speed S");
-    modal_.spindle_rpm = w['s'].value;
-    emit_aux('S', w['s'].value, false);
-  }
+  spindle_speed_words(unit);
 }
 
 // G4 P<seconds>.
@@ -559,6 +575,8 @@ void Interpreter::Impl::set_path_control(const Words::Code& g, double unit) {
 }
 
 void Interpreter::Impl::set_motion_mode(int code10) {
+  // A new series of canned cycles starts at the next cycle block (its initial level).
+  if (modal_.motion != Motion::kCycle || modal_.cycle != code10) modal_.cycle_initial_set = false;
   switch (code10) {
     case 0:
       modal_.motion = Motion::kRapid;
@@ -591,6 +609,12 @@ void Interpreter::Impl::set_motion_mode(int code10) {
       break;
     case 52:
       modal_.motion = Motion::kNurbs;
+      break;
+    case 330:
+      modal_.motion = Motion::kSpindleSync;
+      break;
+    case 331:
+      modal_.motion = Motion::kRigidTap;
       break;
     default:
       modal_.motion = Motion::kCycle;

@@ -105,6 +105,7 @@ class CanonPrinter {
 
  private:
   double last_feed_ = -1;
+  double last_sync_ = 0;  // the pitch of the spindle synchronisation in force (0: none)
 };
 
 // One line of `cncore check --blocks` for a block (stable text format used by golden tests,

@@ -22,6 +22,7 @@
 namespace cncore::interp {
 
 class PlaneSpline;
+struct ThreadPass;
 
 inline constexpr std::size_t kLinearAxes = 3;
 inline constexpr double kZeroMoveMm = 1e-9;  // moves shorter than this are not emitted
@@ -179,7 +180,7 @@ struct Interpreter::Impl final : LiveParameters {
   // interpreter.cpp
   void step();                        // read and execute one line
   void parse_words(std::size_t pos);  // fills words_ from line_.text
-  [[noreturn]] void exponent_or_unknown(std::size_t pos, std::size_t value_start,
+  void exponent_or_unknown(std::size_t pos, std::size_t value_start,
                                         char last_letter) const;
   void execute_words();  // LinuxCNC order of execution
   void refuse_unsupported() const;
@@ -194,7 +195,8 @@ struct Interpreter::Impl final : LiveParameters {
   void execute_motion(const Words::Code* nonmodal, bool axes_for_nonmodal, bool have_axes,
                       std::uint32_t first_axis_col);
   void execute_stops();
-  void line_motion(const AxisVec& target, std::uint32_t col);  // G0 / G1
+  void line_motion(const AxisVec& target, std::uint32_t col);        // G0 / G1 (G96 aware)
+  void plain_line_motion(const AxisVec& target, std::uint32_t col);  // G0 / G1 as one block
   void arc(const AxisVec& target, bool ccw, std::uint32_t col);
   void probe_motion(const AxisVec& target, std::uint32_t col);  // G38.2 … G38.5 (probe.cpp)
   void emit_arc(const AxisVec& target, Vec2 c, bool ccw, std::uint32_t turns, std::uint32_t col);
@@ -239,6 +241,25 @@ struct Interpreter::Impl final : LiveParameters {
   double spline_tolerance_mm() const;
   // lathe_mode.cpp: G7/G8, and the X words of the block as radii
   void apply_lathe_mode();
+
+  // threading.cpp: G33, G33.1, G76, G96/G97
+  bool threading_block() const {
+    const Words::Code* m = words_.group(GGroup::kMotion);
+    return m != nullptr && m->code10 == 760;
+  }
+  double work_radius_mm(const AxisVec& m) const;
+  double css_rpm(double radius_mm, std::uint32_t col) const;
+  void spindle_speed_words(double unit);
+  void css_update(const AxisVec& at, std::uint32_t col);
+  void css_line(const AxisVec& target, std::uint32_t col);
+  double sync_rpm(std::uint32_t col, const char* what) const;
+  void emit_sync_line(const AxisVec& target, double mm_rev, std::uint32_t col, const char* what);
+  double pitch_word(const char* what) const;
+  void spindle_sync_motion(const AxisVec& target, std::uint32_t col);
+  void rigid_tap(const AxisVec& target, std::uint32_t col);
+  void threading_pass(const ThreadPass& t, double depth, std::uint32_t col);
+  void threading_cycle(std::uint32_t col);
+  bool in_sync_ = false;  // the last move emitted followed the spindle
 
   // canned_cycles.cpp
   void canned_cycle(std::uint32_t col);

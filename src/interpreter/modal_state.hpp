@@ -23,7 +23,9 @@ enum class Motion : std::uint8_t {
   kCubicSpline,
   kQuadSpline,
   kNurbs,
-  kProbe
+  kProbe,
+  kSpindleSync,  // G33
+  kRigidTap,     // G33.1
 };
 
 // Group 5: what F means. G93: the move takes 1/F minutes (an F on every feed move's line);
@@ -49,12 +51,22 @@ struct ModalState {
   bool retract_to_r = false;
   double cycle_r = 0, cycle_z = 0, cycle_p = 0, cycle_q = 0;
   bool cycle_r_set = false, cycle_z_set = false;
+  // LinuxCNC's initial level: the drill-axis position (machine mm) before the first cycle block
+  // of a series (until the motion mode changes). G98 returns to it; in G91, R counts from it.
+  double cycle_initial_mm = 0;
+  bool cycle_initial_set = false;
 
   FeedMode feed_mode = FeedMode::kPerMinute;  // group 5: G94
   double feed_mm_min = 0;                     // F in G94, converted to mm/min when it is read
   double feed_mm_rev = 0;                     // F in G95, mm per spindle revolution
   bool feed_set = false;                      // an F word has been seen in the current feed mode
-  double spindle_rpm = 0;                     // the last S word
+  double spindle_rpm = 0;                     // the spindle speed: the last S word in G97
+  int spindle_dir = 0;                        // M3: 1, M4: −1, M5: 0
+  // G96 constant surface speed (group 14; false: G97): the spindle turns at
+  // rpm = css_mm_min / (2π·|X|) at the tool's work X, at most css_max_rpm (D; 0: no D).
+  bool css = false;
+  double css_mm_min = 0;  // surface speed, mm/min (S m/min · 1000 or S ft/min · 304.8)
+  double css_max_rpm = 0;
   int tool = 0;                               // T of the last M6 (tool in the spindle)
   int tool_length_code = 490;                 // group 8: G49 (430 G43, 431 G43.1, 432 G43.2)
   bool diameter_mode = false;                 // group 15: G8 (true: G7, X words are diameters)

@@ -43,6 +43,7 @@ void Interpreter::Impl::check_travel(const AxisVec& lo, const AxisVec& hi, const
 }
 
 void Interpreter::Impl::emit_motion(BlockKind kind, const AxisVec& target, std::uint32_t col) {
+  in_sync_ = false;
   Block b = base_block(kind);
   b.end = target;
   b.col = col;
@@ -54,8 +55,20 @@ void Interpreter::Impl::emit_motion(BlockKind kind, const AxisVec& target, std::
   out_.push_back(b);
 }
 
-// G0/G1 to `target` (machine coordinates).
+// G0/G1 to `target` (machine coordinates). In G96 a G1 follows the speed along it
+// (threading.cpp) and after a G0 the speed is the new radius's.
 void Interpreter::Impl::line_motion(const AxisVec& target, std::uint32_t col) {
+  if (!modal_.css) {
+    plain_line_motion(target, col);
+  } else if (modal_.motion == Motion::kLine) {
+    css_line(target, col);
+  } else {
+    plain_line_motion(target, col);
+    css_update(target, col);
+  }
+}
+
+void Interpreter::Impl::plain_line_motion(const AxisVec& target, std::uint32_t col) {
   const bool rapid = modal_.motion == Motion::kRapid;
   // G93's length: over X Y Z, or over the rotary axes for a rotary-only move (LinuxCNC's rule).
   double linear2 = 0, rotary2 = 0;
@@ -159,6 +172,8 @@ void Interpreter::Impl::arc(const AxisVec& target, bool ccw, std::uint32_t col) 
 void Interpreter::Impl::emit_arc(const AxisVec& target, Vec2 c, bool ccw, std::uint32_t turns,
                                  std::uint32_t col) {
   const PlaneAxes pa = plane_axes(modal_.plane);
+  in_sync_ = false;
+  if (modal_.css) css_update(target, col);  // the speed at the arc's end, for the whole arc
   Block b = base_block(BlockKind::kArc);
   b.col = col;
   b.end = target;

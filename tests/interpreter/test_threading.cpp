@@ -1,0 +1,121 @@
+// Spindle-synchronised motion on the blocks: G33 and G33.1 carry their pitch and the feed it
+// makes with S, a series of them starts from rest, G76's passes follow LinuxCNC's depths, G96
+// sets the spindle speed from the radius; and the errors a threading program can make.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "test_machine.hpp"
+
+namespace cncore::interp::test {
+namespace {
+
+std::vector<Block> blocks(const std::string& text) {
+  Interpreter in(Interpreter::FromText{}, text, "thread.ngc", test_machine(), Options{});
+  std::vector<Block> out;
+  Block b;
+  while (in.next(b)) out.push_back(b);
+  return out;
+}
+
+std::string error_of(const std::string& text) {
+  try {
+    blocks(text);
+  } catch (const InputError& e) {
+    return e.formatted();
+  }
+  return {};
+}
+
+TEST(Threading, G33FollowsTheSpindleAndStartsFromRest) {
+  const auto b = blocks("G18 G21 G90 S400 M3\nG0 X10 Z5\nG33 Z-40 K1.5\nG33 X12 Z-45 K2\nG0 X20\n");
+  std::vector<Block> sync;
+  std::size_t waits = 0;
+  for (const Block& x : b) {
+    if (x.sync_mm_rev > 0) sync.push_back(x);
+    if (x.kind == BlockKind::kDwell && x.dwell_s == 0) ++waits;
+  }
+  ASSERT_EQ(sync.size(), 2U);
+  EXPECT_DOUBLE_EQ(sync[0].feed_mm_min, 1.5 * 400);
+  EXPECT_DOUBLE_EQ(sync[1].feed_mm_min, 2 * 400);
+  EXPECT_TRUE(sync[0].override_fixed);
+  EXPECT_EQ(waits, 1U) << "one index wait before the series, none between its moves";
+}
+
+TEST(Threading, RigidTapGoesInReversesAndComesBackFaster) {
+  const auto b = blocks("G17 G21 G90 S300 M3\nG0 X5 Y5 Z2\nG33.1 Z-10 K1.25 I2\nG0 Z20\n");
+  std::vector<Block> sync;
+  std::vector<double> m;
+  for (const Block& x : b) {
+    if (x.sync_mm_rev > 0) sync.push_back(x);
+    if (x.kind == BlockKind::kAux && x.aux_letter == 'M') m.push_back(x.aux_value);
+  }
+  ASSERT_EQ(sync.size(), 2U);
+  EXPECT_DOUBLE_EQ(sync[0].end[2], -10);
+  EXPECT_DOUBLE_EQ(sync[1].end[2], 2);
+  EXPECT_DOUBLE_EQ(sync[0].feed_mm_min, 1.25 * 300);
+  EXPECT_DOUBLE_EQ(sync[1].feed_mm_min, 1.25 * 600);
+  EXPECT_EQ(sync[0].path_mode, PathMode::kExactStop);
+  EXPECT_EQ(m, (std::vector<double>{3, 4, 3}));
+}
+
+// G76 P2 Z-30 I-1 J0.1 K1.2 R2 H2: depths 0.1·√n while below 1.2 (n = 1 … 143), then 1.2 three
+// times; every pass cuts along Z at X = peaks − depth.
+TEST(Threading, G76PassesCutTheDegressionDepthsThenTheSpringPasses) {
+  const auto b = blocks("G18 G21 G90 S500 M3\nG0 X20 Z5\nG76 P2 Z-30 I-1 J0.1 K1.2 R2 H2\n");
+  std::vector<double> cut_x;
+  for (const Block& x : b) {
+    if (x.sync_mm_rev > 0 && x.start[0] == x.end[0]) cut_x.push_back(x.end[0]);
+  }
+  std::vector<double> want;
+  for (int n = 1; 0.1 * std::sqrt(n) < 1.2; ++n) want.push_back(19 - 0.1 * std::sqrt(n));
+  for (int k = 0; k < 3; ++k) want.push_back(19 - 1.2);
+  ASSERT_EQ(cut_x.size(), want.size());
+  for (std::size_t i = 0; i < want.size(); ++i) EXPECT_NEAR(cut_x[i], want[i], 1e-9) << i;
+  EXPECT_DOUBLE_EQ(b.back().end[0], 20);
+  EXPECT_DOUBLE_EQ(b.back().end[2], -30);
+}
+
+TEST(Threading, ConstantSurfaceSpeedFollowsTheRadiusUpToD) {
+  // 150 m/min: 150000 / (2π·r) rpm, capped at D2000 below r = 11.94 mm.
+  const auto b = blocks("G18 G21 G90 G0 X40 Z0\nG96 S150 D2000 M3\nG95 G1 X0 F0.1\n");
+  double last_rpm = 0;
+  bool checked = false;
+  for (const Block& x : b) {
+    if (x.kind == BlockKind::kAux && x.aux_letter == 'S') last_rpm = x.aux_value;
+    if (x.kind != BlockKind::kLine) continue;
+    const double r_mid = std::fabs(x.start[0] + x.end[0]) / 2;
+    const double want = std::min(2000.0, 150000 / (2 * std::numbers::pi * r_mid));
+    EXPECT_NEAR(last_rpm, want, want * 0.021) << "at r " << r_mid;
+    EXPECT_NEAR(x.feed_mm_min, 0.1 * last_rpm, 1e-9);
+    const double r0 = std::fabs(x.start[0]), r1 = std::fabs(x.end[0]);
+    if (r1 > 11.94) {
+      EXPECT_LE(r0 / r1, 1.0 + 0.0205) << "a piece spans at most 2 % of speed";
+    }
+    checked = true;
+  }
+  EXPECT_TRUE(checked);
+  EXPECT_DOUBLE_EQ(last_rpm, 2000);
+}
+
+TEST(Threading, ErrorsAreAtTheLine) {
+  EXPECT_NE(error_of("G21 S400 M3\nG33 Z-10\n").find("thread.ngc:2:1: error: G33 without K"),
+            std::string::npos);
+  EXPECT_NE(error_of("G21 S400\nG33 Z-10 K1\n").find("2:1: error: G33 needs the spindle turning"),
+            std::string::npos);
+  EXPECT_NE(error_of("G17 G21 S400 M3\nG76 P1 Z-10 I-1 J0.1 K0.6\n")
+                .find("2:1: error: G76 needs the ZX plane"),
+            std::string::npos);
+  EXPECT_NE(error_of("G18 G21 S400 M3\nG76 P1 Z-10 I-1 J0.1\n").find("G76 without K"),
+            std::string::npos);
+  EXPECT_NE(error_of("G18 G21 G0 X10\nG96 S100 M3\nG1 X0 F100\n").find("G96 at X0 without D"),
+            std::string::npos);
+  // 10 mm per revolution at 5000 rpm is 50 m/min along Z: beyond the test machine's axis.
+  EXPECT_NE(error_of("G18 G21 S5000 M3\nG33 Z-10 K10\n").find("beyond its limit"),
+            std::string::npos);
+  EXPECT_NE(error_of("G21 G0 E5\n").find("1:8: error: unknown word 'E'"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace cncore::interp::test
