@@ -183,7 +183,7 @@ void Connection::soft_reset(std::string& out) {
   controller_.forget_modes();  // Grbl's parser starts afresh after a soft reset
   rx_.clear();
   discard_line_ = false;
-  busy_ = homing_ = door_ = sleep_ = false;
+  busy_ = homing_ = door_ = sleep_ = probing_ = false;
   connect(out);
 }
 
@@ -204,9 +204,19 @@ void Connection::poll(std::string& out) {
       line_out(out, "ok");
     }
   }
+  if (probing_ && !moving(s.state) && !s.resetting) {
+    probing_ = false;
+    if (s.state == MachineState::kAlarm) {
+      error_out(out, Error::kSystemGcLock);
+    } else {
+      last_probe_ = probe_report(s.commanded, probe_tripped_, controller_.machine());
+      line_out(out, last_probe_);
+      line_out(out, "ok");
+    }
+  }
   if (busy_ && !moving(s.state)) busy_ = false;
   if (startup_due_ && s.state == MachineState::kIdle && !s.resetting) run_startup(out);
-  if (!busy_ && !homing_) {
+  if (!busy_ && !homing_ && !probing_) {
     while (next_line(out)) {
     }
   }
@@ -253,7 +263,7 @@ bool Connection::next_line(std::string& out) {
   }
   const bool taken = line[0] == '$' ? dollar(line, out) : gcode(line, out);
   if (taken) rx_.erase(0, consumed);
-  return taken && !busy_ && !homing_;
+  return taken && !busy_ && !homing_ && !probing_;
 }
 
 bool Connection::gcode(const std::string& line, std::string& out) {
@@ -270,6 +280,12 @@ bool Connection::gcode(const std::string& line, std::string& out) {
   if (r.outcome == runtime::StreamOutcome::kRefused) {
     line_out(out, fmt::format("[MSG:{}]", r.error));
     error_out(out, error_for(r.error));
+    return true;
+  }
+  if (const std::optional<bool> tripped = controller_.last_line_probe();
+      tripped && s.state != MachineState::kCheck) {
+    probing_ = true;
+    probe_tripped_ = *tripped;
     return true;
   }
   line_out(out, "ok");
@@ -534,7 +550,7 @@ void Connection::offsets(std::string& out) const {
     out += fmt::format("[{}:0.000,0.000,0.000]\r\n", g);
   }
   line_out(out, "[TLO:0.000]");
-  line_out(out, "[PRB:0.000,0.000,0.000:0]");
+  line_out(out, last_probe_);
 }
 
 void Connection::report_status(std::string& out) {

@@ -6,6 +6,8 @@
 //   appear and acted on at once, also when the receive buffer is full;
 // - the other bytes form lines in a 128-byte receive buffer (what character-counting senders
 //   count); each line is answered by exactly one `ok` or `error:N`, in order;
+// - a probe line (G38.2 … G38.5) is answered once its move has ended: `[PRB:x,y,z:t]` (machine
+//   coordinates of the trip point, t = 1 when the simulated probe tripped) and `ok`;
 // - a G-code line is checked by cncore's interpreter and queued into one running stream job
 //   (runtime::Controller::stream_line), so the look-ahead plans across the lines; `ok` when it
 //   is queued, as Grbl answers when a line is in its planner. While the queue is full the line
@@ -74,6 +76,11 @@ class Connection {
   std::string rx_;       // bytes not yet taken as lines (real-time bytes removed)
   bool busy_ = false;    // a $RST=# job has not ended yet
   bool homing_ = false;  // $H answered once homing ends
+  // A G38.x line: answered ([PRB:…] and ok) once its move has ended, as Grbl answers a probe
+  // cycle; the lines after it wait.
+  bool probing_ = false;
+  bool probe_tripped_ = false;
+  std::string last_probe_ = "[PRB:0.000,0.000,0.000:0]";
   bool door_ = false;    // safety door opened (0x84) and not yet resumed
   bool sleep_ = false;   // $SLP until soft reset
   bool startup_due_ = false;

@@ -21,6 +21,10 @@ std::string axes_text(const AxisVec& v, const MachineConfig& m) {
 
 }  // namespace
 
+std::string probe_report(const AxisVec& machine_mm, bool tripped, const MachineConfig& machine) {
+  return fmt::format("[PRB:{}:{}]", axes_text(machine_mm, machine), tripped ? 1 : 0);
+}
+
 std::string state_text(const runtime::Status& s, const ReportInputs& in) {
   using runtime::MachineState;
   if (in.sleep) return "Sleep";

@@ -29,6 +29,10 @@ std::string state_text(const runtime::Status& s, const ReportInputs& in);
 std::string status_report(const runtime::Status& s, const MachineConfig& machine,
                           const ReportInputs& in);
 
+// `[PRB:x,y,z:t]`: where the last probe move ended (machine coordinates) and whether it
+// tripped, as Grbl reports after G38.x and in `$#`.
+std::string probe_report(const AxisVec& machine_mm, bool tripped, const MachineConfig& machine);
+
 // `$G`'s `[GC:…]` line: motion, coordinate system, plane, units, distance and feed modes, spindle,
 // coolant, tool, F (in program units per minute, or per revolution in G95) and S, as Grbl 1.1
 // orders them. The G words and F, S, T are the parser's (`parser`); spindle and coolant are the

@@ -241,6 +241,9 @@ class Controller {
   // while a stream is open, else what the last completed program or MDI line left (the start
   // state when none). What a sender's `$G` shows.
   interp::ModalState parser_state() const;
+  // The last line stream_line() took was a probe move (G38.2 … G38.5): whether the probe trips
+  // on it (the simulated probe, [probe] in the configuration); nullopt: not a probe move.
+  std::optional<bool> last_line_probe() const;
   // The next program, MDI line or stream starts from the start modes (G80 G54 G17 G21 G90 G94,
   // no F, S or T), as a Grbl board's soft reset leaves its parser. Offsets and parameters stay.
   void forget_modes();

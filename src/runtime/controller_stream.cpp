@@ -128,6 +128,13 @@ interp::ModalState Controller::parser_state() const {
   return d.checker.modal.value_or(interp::ModalState{});
 }
 
+std::optional<bool> Controller::last_line_probe() const {
+  Impl& d = *impl_;
+  const std::lock_guard lock(d.control);
+  if (!d.checker.probed) return std::nullopt;
+  return d.checker.probe_tripped;
+}
+
 void Controller::forget_modes() {
   Impl& d = *impl_;
   const std::lock_guard lock(d.control);

@@ -109,9 +109,17 @@ std::string StreamChecker::check(const std::string& line, const MachineConfig& m
     interp::Interpreter in(interp::Interpreter::FromText{}, line, "stream", m, o);
     Block b;
     AxisVec end = position;
-    while (in.next(b)) end = b.end;
+    bool moved = false;
+    while (in.next(b)) {
+      end = b.end;
+      moved = moved || is_motion(b);
+    }
     modal = in.modal_state();
     params = in.numbered_parameters(kFirstPersistentParameter, kLastPersistentParameter);
+    // #5070 is LinuxCNC's "the last G38 tripped"; it starts each checked line at 0.
+    constexpr int kTripped = 5070;
+    probe_tripped = in.numbered_parameters(kTripped, kTripped).at(kTripped) != 0;
+    probed = moved && modal->motion == interp::Motion::kProbe;
     position = end;
   } catch (const InputError& e) {
     return e.formatted();

@@ -62,6 +62,9 @@ struct StreamChecker {
   std::optional<interp::ModalState> modal;
   std::map<int, double> params;
   AxisVec position;  // machine coordinates where the last checked line ends
+  // The last checked line probed (G38.2 … G38.5) and the probe tripped (#5070 after it).
+  bool probed = false;
+  bool probe_tripped = false;
 
   // Interprets `line` from this state; empty and the state advanced when it is good, else the
   // error (FILE:LINE:COL: error: …) and the state as it was. `ends_program`: the line has M2

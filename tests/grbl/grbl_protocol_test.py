@@ -33,6 +33,9 @@ MACHINE = """
 [servo]
 home_search_mm_min = 9000
 home_latch_mm_min = 600
+
+[probe]
+boxes = [[-50, -50, -30, 50, 50, -2]]
 """
 
 
@@ -152,6 +155,34 @@ def test_gcode(c):
     c.until("^" + WELCOME.replace("[", r"\[").replace("$", r"\$") + "$")
     rep = c.wait_state("Idle")
     check(10 < position(rep)[0] < 30, f"0x18 stops the move on its way ({rep})")
+
+
+def test_probe(c):
+    """G38.2 onto the [probe] box (top at machine Z -2): [PRB:…:1] and ok once the move ended, where
+    the tool stands; G38.3 beside it: [PRB:…:0] at the target; $# shows the last one."""
+    expect_reply(c, "G21 G90 G0 X10 Y10 Z5", "ok")
+    c.wait_state("Idle")
+    sent = time.time()
+    got = expect_reply(c, "G38.2 Z-10 F300", "ok", "G38.2 onto the box")
+    took = time.time() - sent
+    prb = [x for x in got if x.startswith("[PRB:")]
+    rep = c.status()
+    check(len(prb) == 1 and prb[0].endswith(":1]"), f"G38.2: one [PRB:…:1] before its ok ({got})")
+    z = float(prb[0][5:].split(":")[0].split(",")[2]) if prb else None
+    check(z is not None and abs(z + 2) < 1e-3, f"G38.2: the probe tripped at Z-2 ({prb})")
+    # 7 mm at 300 mm/min take 1.4 s: the ok came after the move, and the tool stands there.
+    check(took > 1.3 and rep.startswith("<Idle") and position(rep)[2] == z,
+          f"G38.2: ok after the move ({took:.2f} s), the tool at the trip point ({rep})")
+    expect_reply(c, "G0 Z5", "ok")
+    expect_reply(c, "G0 X70", "ok")
+    got = expect_reply(c, "G38.3 Z-5 F600", "ok", "G38.3 beside the box")
+    prb3 = [x for x in got if x.startswith("[PRB:")]
+    check(len(prb3) == 1 and prb3[0].endswith(",-5.000:0]"), f"G38.3: no contact, [PRB:…:0] ({got})")
+    got = expect_reply(c, "$#", "ok")
+    check(prb3 and prb3[0] in got, f"$#: the last probe ({got})")
+    expect_reply(c, "G0 Z5", "ok")
+    expect_reply(c, "G0 X0 Y0", "ok")
+    c.wait_state("Idle")
 
 
 def gc_words(c):
@@ -311,6 +342,7 @@ def main():
             test_jog(tcp)
             test_check_mode(tcp)
             test_alarm(tcp, server)
+            test_probe(tcp)
             test_streaming(tcp, "tcp")
             tcp.close()
             time.sleep(0.3)

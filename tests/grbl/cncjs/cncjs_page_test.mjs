@@ -83,7 +83,7 @@ async function operate(page, pty, end) {
   await page.locator('input[type=file]').first().setInputFiles(program);
   await until('the program to load', async () => page.locator('button:has(i.fa-play)').isEnabled(), 20);
   await page.locator('button:has(i.fa-play)').click();
-  await until('the page to show Run', async () => (await pageState(page)) === 'Run', 20);
+  await until('the page to show Run', async () => (await pageState(page)) === 'Run', 120);
   await sleep(1500);  // the path half drawn, the tool on it
   await page.screenshot({ path: path.join(out, 'cncjs-running.png') });
   step('CNCjs page: Run (screenshot cncjs-running.png)');
@@ -120,6 +120,9 @@ async function main() {
     args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--no-sandbox'] });
   try {
     const page = await browser.newPage({ viewport: { width: 1400, height: 900 } });
+    // CNCjs draws the loaded program in WebGL on the CPU (SwiftShader): on a loaded two-core
+    // machine its page can be busy for tens of seconds, and a click waits for it.
+    page.setDefaultTimeout(120000);
     const errors = [];
     page.on('pageerror', (e) => errors.push(e.message));
     await until('CNCjs to answer', async () => {
