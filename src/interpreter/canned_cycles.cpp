@@ -89,6 +89,9 @@ void Interpreter::Impl::cycle_body(std::size_t drill_axis, double r_mm, double b
       cycle_move(true, at(clear_mm), col);
       spindle(3);
       return;
+    case 870:
+      back_bore(drill_axis, bottom_mm, clear_mm, col);
+      return;
     default:  // 810 drilling, 820 drilling with dwell
       cycle_move(false, at(bottom_mm), col);
       if (code == 820) dwell();
@@ -122,6 +125,18 @@ void Interpreter::Impl::canned_cycle(std::uint32_t col) {
     modal_.cycle_z_set = true;
   }
   if (w.has('p')) modal_.cycle_p = w['p'].value;
+  if (modal_.cycle == 870) {
+    const bool first = !modal_.cycle_initial_set;
+    for (std::size_t a = 0; a < kLinearAxes; ++a) {
+      const char c = static_cast<char>('i' + a);
+      if (w.has(c)) {
+        modal_.cycle_ijk[a] = w[c].value;
+      } else if (first) {
+        fail(col, fmt::format("G87 without {} (see docs/gcode.md)", static_cast<char>('I' + a)));
+      }
+    }
+    if (modal_.spindle_dir == 0) fail(col, "G87 needs the spindle turning: program M3 or M4 first");
+  }
   if (w.has('q')) modal_.cycle_q = w['q'].value;
   const char up = static_cast<char>(drill_word - 'a' + 'A');
   const std::string g = code_text('G', modal_.cycle);
@@ -192,6 +207,39 @@ void Interpreter::Impl::canned_cycle(std::uint32_t col) {
     cycle_body(n, r_mm, bottom_mm, clear_mm, col);
     old_cc = clear_mm;
   }
+}
+
+// G87 back boring, as LinuxCNC moves: the tool enters the hole beside its axis (the plane words'
+// I J K offsets) with the spindle stopped, goes below the part to the bottom, centres, bores
+// upward at feed to the top of the back bore (the drill axis's I J K word; in G91 from the
+// bottom) and back down, stops the spindle and leaves the way it came.
+void Interpreter::Impl::back_bore(std::size_t n, double bottom_mm, double clear_mm,
+                                  std::uint32_t col) {
+  const PlaneAxes pa = plane_axes(modal_.plane);
+  const double unit = modal_.length_unit_mm();
+  const double middle_mm = modal_.absolute ? modal_.cycle_ijk[n] * unit + offset(n)
+                                           : bottom_mm + modal_.cycle_ijk[n] * unit;
+  AxisVec hole = pos_;  // at R over the hole
+  AxisVec entry = hole;
+  entry[pa.first] += modal_.cycle_ijk[pa.first] * unit;
+  entry[pa.second] += modal_.cycle_ijk[pa.second] * unit;
+  const double turning = modal_.spindle_dir > 0 ? 3 : 4;
+  auto along = [&](AxisVec p, double v) {
+    p[n] = v;
+    return p;
+  };
+  cycle_move(true, entry, col);
+  emit_aux('M', 5, true);
+  cycle_move(true, along(entry, bottom_mm), col);
+  cycle_move(true, along(hole, bottom_mm), col);
+  emit_aux('M', turning, true);
+  cycle_move(false, along(hole, middle_mm), col);
+  cycle_move(false, along(hole, bottom_mm), col);
+  emit_aux('M', 5, true);
+  cycle_move(true, along(entry, bottom_mm), col);
+  cycle_move(true, along(entry, clear_mm), col);
+  cycle_move(true, along(hole, clear_mm), col);
+  emit_aux('M', turning, true);
 }
 
 }  // namespace cncore::interp

@@ -125,13 +125,12 @@ CodeInfo g_code_info(int code10) {
     case 840:
     case 850:
     case 860:
+    case 870:
     case 880:
     case 890:
       return ok(GGroup::kMotion, "canned cycle");
     case 760:
       return ok(GGroup::kMotion, "threading cycle");
-    case 870:
-      return no(GGroup::kMotion, "canned cycle");
     case 800:
       return ok(GGroup::kMotion, "cancel motion mode");
     case 900:

@@ -414,8 +414,9 @@ void Interpreter::Impl::execute_motion(const Words::Code* nonmodal, bool axes_fo
   if (!arc_mode && !threading_block()) {
     for (char c : {'i', 'j', 'k', 'r'}) {
       const bool sync_word = sync_mode && (c == 'k' || (c == 'i' && modal_.motion == Motion::kRigidTap));
+      const bool back_bore_word = cycle_mode && modal_.cycle == 870 && c != 'r';
       if (w.has(c) && !(c == 'r' && (nm == 100 || cycle_mode)) && !(spline_ij && c != 'r') &&
-          !sync_word) {
+          !sync_word && !back_bore_word) {
         fail(w[c].col, fmt::format("{} word without G2/G3", static_cast<char>(c - 'a' + 'A')));
       }
     }

@@ -266,6 +266,7 @@ struct Interpreter::Impl final : LiveParameters {
   void cycle_move(bool rapid, const AxisVec& target, std::uint32_t col);
   void cycle_body(std::size_t drill_axis, double r_mm, double bottom_mm, double clear_mm,
                   std::uint32_t col);
+  void back_bore(std::size_t drill_axis, double bottom_mm, double clear_mm, std::uint32_t col);
 
   // tool_offsets.cpp
   void init_tools(const Options& options);

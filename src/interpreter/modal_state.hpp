@@ -3,6 +3,7 @@
 // program's units (G20/G21) only scale the numbers as they are read.
 #pragma once
 
+#include <array>
 #include <cstdint>
 
 #include "core/block.hpp"
@@ -50,6 +51,9 @@ struct ModalState {
   int probe_code = 382;  // kProbe: G38.2 … G38.5 as 382 … 385
   bool retract_to_r = false;
   double cycle_r = 0, cycle_z = 0, cycle_p = 0, cycle_q = 0;
+  // G87: I J K as written (the offsets of the entry point in the plane's axes, the top of the
+  // back bore along the drill axis), in force for the next G87 blocks.
+  std::array<double, 3> cycle_ijk{};
   bool cycle_r_set = false, cycle_z_set = false;
   // LinuxCNC's initial level: the drill-axis position (machine mm) before the first cycle block
   // of a series (until the motion mode changes). G98 returns to it; in G91, R counts from it.

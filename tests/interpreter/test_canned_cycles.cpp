@@ -77,6 +77,34 @@ TEST(CannedCycles, BoringCycles) {
             (Trace{"R 1000", "R 200", "F -500", "D 2.000000", "R 1000"}));
 }
 
+// G87: in beside the hole (I J) with the spindle stopped, below the part, centred, bore up to
+// K and back at feed, out the same way; in G91 K counts from the bottom.
+TEST(CannedCycles, BackBoringEntersBesideTheHoleAndBoresUpward) {
+  const auto bs = blocks("S500 M3\nG0 X10 Y10 Z20\nG98 G87 Z-20 R5 I3 J-2 K-10 F100\n"
+                         "G91 G87 X10 Z-25 R-15 K6\n");
+  const Trace want = {"M 3",    "R 2000", "R 500", "R 500", "M 5",    "R -2000", "R -2000",
+                      "M 3",    "F -1000", "F -2000", "M 5",  "R -2000", "R 2000", "R 2000",
+                      "M 3"};
+  const auto t = trace(bs, kZ);
+  ASSERT_GE(t.size(), want.size());
+  EXPECT_EQ(Trace(t.begin(), t.begin() + static_cast<long>(want.size())), want);
+  // The entry beside the hole, and the second hole 10 mm on with its back bore to -20 + 6.
+  double top_second = -1e9;
+  bool entered_beside = false;
+  for (const Block& b : bs) {
+    if (b.kind == BlockKind::kRapid && b.end[2] == -20 && b.end[0] == 13 && b.end[1] == 8) {
+      entered_beside = true;
+    }
+    if (b.kind == BlockKind::kLine && b.end[0] == 20) top_second = std::max(top_second, b.end[2]);
+  }
+  EXPECT_TRUE(entered_beside);
+  EXPECT_DOUBLE_EQ(top_second, -14);
+  EXPECT_NE(error_of("S500\nG0 Z20\nG87 Z-20 R5 I3 J0 K-10 F100\n").find("G87 needs the spindle"),
+            std::string::npos);
+  EXPECT_NE(error_of("S500 M3\nG0 Z20\nG87 Z-20 R5 I3 K-10 F100\n").find("G87 without J"),
+            std::string::npos);
+}
+
 TEST(CannedCycles, OtherPlanesDrillAlongTheirNormal) {
   // G18: the hole at Z X, drilled along Y; G19: at Y Z, along X.
   auto b = blocks("G0 Y10\nG18 G99 G81 Z4 X3 Y-5 R2 F100\n");
