@@ -81,8 +81,8 @@ class Connection {
   bool probing_ = false;
   bool probe_tripped_ = false;
   std::string last_probe_ = "[PRB:0.000,0.000,0.000:0]";
-  bool door_ = false;    // safety door opened (0x84) and not yet resumed
-  bool sleep_ = false;   // $SLP until soft reset
+  bool door_ = false;   // safety door opened (0x84) and not yet resumed
+  bool sleep_ = false;  // $SLP until soft reset
   bool startup_due_ = false;
   bool discard_line_ = false;  // an overlong line is being skipped to its end
   runtime::AlarmCode last_alarm_ = runtime::AlarmCode::kNone;

@@ -125,18 +125,7 @@ void Interpreter::Impl::canned_cycle(std::uint32_t col) {
     modal_.cycle_z_set = true;
   }
   if (w.has('p')) modal_.cycle_p = w['p'].value;
-  if (modal_.cycle == 870) {
-    const bool first = !modal_.cycle_initial_set;
-    for (std::size_t a = 0; a < kLinearAxes; ++a) {
-      const char c = static_cast<char>('i' + a);
-      if (w.has(c)) {
-        modal_.cycle_ijk[a] = w[c].value;
-      } else if (first) {
-        fail(col, fmt::format("G87 without {} (see docs/gcode.md)", static_cast<char>('I' + a)));
-      }
-    }
-    if (modal_.spindle_dir == 0) fail(col, "G87 needs the spindle turning: program M3 or M4 first");
-  }
+  if (modal_.cycle == 870) back_bore_words(col);
   if (w.has('q')) modal_.cycle_q = w['q'].value;
   const char up = static_cast<char>(drill_word - 'a' + 'A');
   const std::string g = code_text('G', modal_.cycle);
@@ -207,6 +196,21 @@ void Interpreter::Impl::canned_cycle(std::uint32_t col) {
     cycle_body(n, r_mm, bottom_mm, clear_mm, col);
     old_cc = clear_mm;
   }
+}
+
+// G87's I J K: required on the first block of a series, then in force like R.
+void Interpreter::Impl::back_bore_words(std::uint32_t col) {
+  const Words& w = words_;
+  const bool first = !modal_.cycle_initial_set;
+  for (std::size_t a = 0; a < kLinearAxes; ++a) {
+    const char c = static_cast<char>('i' + a);
+    if (w.has(c)) {
+      modal_.cycle_ijk[a] = w[c].value;
+    } else if (first) {
+      fail(col, fmt::format("G87 without {} (see docs/gcode.md)", static_cast<char>('I' + a)));
+    }
+  }
+  if (modal_.spindle_dir == 0) fail(col, "G87 needs the spindle turning: program M3 or M4 first");
 }
 
 // G87 back boring, as LinuxCNC moves: the tool enters the hole beside its axis (the plane words'

@@ -295,10 +295,6 @@ void Interpreter::Impl::execute_words() {
 
   refuse_unsupported();
   apply_lathe_mode();
-  if (w.has('e')) {
-    const Words::Code* m = w.group(GGroup::kMotion);
-    if (m == nullptr || m->code10 != 760) fail(w['e'].col, "unknown word 'E'");
-  }
 
   // The units of this block: a G20/G21 in the block applies to all its numbers (cncore reads
   // F with them too, so "G20 F10" is 10 in/min).
@@ -410,10 +406,12 @@ void Interpreter::Impl::execute_motion(const Words::Code* nonmodal, bool axes_fo
   const bool cycle_mode = modal_.motion == Motion::kCycle;
   const bool spline_ij =
       modal_.motion == Motion::kCubicSpline || modal_.motion == Motion::kQuadSpline;
-  const bool sync_mode = modal_.motion == Motion::kSpindleSync || modal_.motion == Motion::kRigidTap;
+  const bool sync_mode =
+      modal_.motion == Motion::kSpindleSync || modal_.motion == Motion::kRigidTap;
   if (!arc_mode && !threading_block()) {
     for (char c : {'i', 'j', 'k', 'r'}) {
-      const bool sync_word = sync_mode && (c == 'k' || (c == 'i' && modal_.motion == Motion::kRigidTap));
+      const bool sync_word =
+          sync_mode && (c == 'k' || (c == 'i' && modal_.motion == Motion::kRigidTap));
       const bool back_bore_word = cycle_mode && modal_.cycle == 870 && c != 'r';
       if (w.has(c) && !(c == 'r' && (nm == 100 || cycle_mode)) && !(spline_ij && c != 'r') &&
           !sync_word && !back_bore_word) {
@@ -515,6 +513,7 @@ void Interpreter::Impl::refuse_unsupported() const {
       fail(m.col, fmt::format("{} {} is not supported", code_text('M', m.code10), info.name));
     }
   }
+  if (w.has('e') && !threading_block()) fail(w['e'].col, "unknown word 'E'");  // G76's only
 }
 
 // Step 10 of the order of execution: M52 adaptive feed control (spec 04), P1 or no P on, P0

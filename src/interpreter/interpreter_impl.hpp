@@ -180,8 +180,7 @@ struct Interpreter::Impl final : LiveParameters {
   // interpreter.cpp
   void step();                        // read and execute one line
   void parse_words(std::size_t pos);  // fills words_ from line_.text
-  void exponent_or_unknown(std::size_t pos, std::size_t value_start,
-                                        char last_letter) const;
+  void exponent_or_unknown(std::size_t pos, std::size_t value_start, char last_letter) const;
   void execute_words();  // LinuxCNC order of execution
   void refuse_unsupported() const;
   void adaptive_feed_events();  // M52
@@ -267,6 +266,7 @@ struct Interpreter::Impl final : LiveParameters {
   void cycle_body(std::size_t drill_axis, double r_mm, double bottom_mm, double clear_mm,
                   std::uint32_t col);
   void back_bore(std::size_t drill_axis, double bottom_mm, double clear_mm, std::uint32_t col);
+  void back_bore_words(std::uint32_t col);
 
   // tool_offsets.cpp
   void init_tools(const Options& options);

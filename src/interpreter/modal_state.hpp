@@ -71,9 +71,9 @@ struct ModalState {
   bool css = false;
   double css_mm_min = 0;  // surface speed, mm/min (S m/min · 1000 or S ft/min · 304.8)
   double css_max_rpm = 0;
-  int tool = 0;                               // T of the last M6 (tool in the spindle)
-  int tool_length_code = 490;                 // group 8: G49 (430 G43, 431 G43.1, 432 G43.2)
-  bool diameter_mode = false;                 // group 15: G8 (true: G7, X words are diameters)
+  int tool = 0;                // T of the last M6 (tool in the spindle)
+  int tool_length_code = 490;  // group 8: G49 (430 G43, 431 G43.1, 432 G43.2)
+  bool diameter_mode = false;  // group 15: G8 (true: G7, X words are diameters)
 
   double length_unit_mm() const { return inch ? 25.4 : 1.0; }
 };

@@ -35,8 +35,9 @@ double Interpreter::Impl::css_rpm(double radius_mm, std::uint32_t col) const {
   const double limit = modal_.css_max_rpm > 0 ? modal_.css_max_rpm : HUGE_VAL;
   if (radius_mm <= 1e-9) {
     if (modal_.css_max_rpm <= 0) {
-      fail(col, "G96 at X0 without D: the spindle speed would be infinite (program D, the "
-                "maximum rpm)");
+      fail(col,
+           "G96 at X0 without D: the spindle speed would be infinite (program D, the "
+           "maximum rpm)");
     }
     return limit;
   }
@@ -141,7 +142,8 @@ void Interpreter::Impl::emit_sync_line(const AxisVec& target, double mm_rev, std
                                        const char* what) {
   const double feed = mm_rev * sync_rpm(col, what);
   double len2 = 0;
-  for (std::size_t a = 0; a < kLinearAxes; ++a) len2 += (target[a] - pos_[a]) * (target[a] - pos_[a]);
+  for (std::size_t a = 0; a < kLinearAxes; ++a)
+    len2 += (target[a] - pos_[a]) * (target[a] - pos_[a]);
   const double len = std::sqrt(len2);
   check_travel(target, target, target, col);
   if (len <= kZeroMoveMm) {
@@ -179,7 +181,8 @@ void Interpreter::Impl::emit_sync_line(const AxisVec& target, double mm_rev, std
 // The K word of G33 / G33.1: the distance per revolution (program units).
 double Interpreter::Impl::pitch_word(const char* what) const {
   const Words& w = words_;
-  if (!w.has('k')) fail(w.first_col, fmt::format("{} without K (the distance per revolution)", what));
+  if (!w.has('k'))
+    fail(w.first_col, fmt::format("{} without K (the distance per revolution)", what));
   if (w['k'].value <= 0) fail(w['k'].col, "K (the distance per revolution) must be > 0");
   return w['k'].value * modal_.length_unit_mm();
 }
@@ -289,7 +292,8 @@ void Interpreter::Impl::threading_cycle(std::uint32_t col) {
     }
   }
   auto need = [&](char c, const char* what) {
-    if (!w.has(c)) fail(col, fmt::format("G76 without {} ({})", static_cast<char>(c - 'a' + 'A'), what));
+    if (!w.has(c))
+      fail(col, fmt::format("G76 without {} ({})", static_cast<char>(c - 'a' + 'A'), what));
     return w[c].value;
   };
   const double unit = modal_.length_unit_mm();
@@ -308,7 +312,8 @@ void Interpreter::Impl::threading_cycle(std::uint32_t col) {
   const double q = w.has('q') ? w['q'].value : 0.0;
   if (q < 0 || q >= 90) fail(w['q'].col, "G76: Q (the compound angle) must be in [0, 90) degrees");
   const double h = w.has('h') ? w['h'].value : 0.0;
-  if (h < 0 || h != std::floor(h)) fail(w['h'].col, "G76: H (spring passes) must be a whole number >= 0");
+  if (h < 0 || h != std::floor(h))
+    fail(w['h'].col, "G76: H (spring passes) must be a whole number >= 0");
   const double l = w.has('l') ? w['l'].value : 0.0;
   if (l != 0 && l != 1 && l != 2 && l != 3) fail(w['l'].col, "G76: L must be 0, 1, 2 or 3");
   const double e = w.has('e') ? w['e'].value * unit : 0.0;
@@ -318,7 +323,8 @@ void Interpreter::Impl::threading_cycle(std::uint32_t col) {
   t.start_x = pos_[kX];
   t.start_z = pos_[kZ];
   t.end_z = modal_.absolute ? z_word * unit + offset(kZ) : pos_[kZ] + z_word * unit;
-  if (std::fabs(t.end_z - t.start_z) <= kZeroMoveMm) fail(w['z'].col, "G76: Z is where the tool is");
+  if (std::fabs(t.end_z - t.start_z) <= kZeroMoveMm)
+    fail(w['z'].col, "G76: Z is where the tool is");
   if (2 * e > std::fabs(t.end_z - t.start_z)) {
     fail(w['e'].col, "G76: E is more than half the thread's length");
   }

@@ -80,11 +80,12 @@ TEST(CannedCycles, BoringCycles) {
 // G87: in beside the hole (I J) with the spindle stopped, below the part, centred, bore up to
 // K and back at feed, out the same way; in G91 K counts from the bottom.
 TEST(CannedCycles, BackBoringEntersBesideTheHoleAndBoresUpward) {
-  const auto bs = blocks("S500 M3\nG0 X10 Y10 Z20\nG98 G87 Z-20 R5 I3 J-2 K-10 F100\n"
-                         "G91 G87 X10 Z-25 R-15 K6\n");
-  const Trace want = {"M 3",    "R 2000", "R 500", "R 500", "M 5",    "R -2000", "R -2000",
-                      "M 3",    "F -1000", "F -2000", "M 5",  "R -2000", "R 2000", "R 2000",
-                      "M 3"};
+  const auto bs = blocks(
+      "S500 M3\nG0 X10 Y10 Z20\nG98 G87 Z-20 R5 I3 J-2 K-10 F100\n"
+      "G91 G87 X10 Z-25 R-15 K6\n");
+  const Trace want = {"M 3",     "R 2000",  "R 500",  "R 500",   "M 5",
+                      "R -2000", "R -2000", "M 3",    "F -1000", "F -2000",
+                      "M 5",     "R -2000", "R 2000", "R 2000",  "M 3"};
   const auto t = trace(bs, kZ);
   ASSERT_GE(t.size(), want.size());
   EXPECT_EQ(Trace(t.begin(), t.begin() + static_cast<long>(want.size())), want);
