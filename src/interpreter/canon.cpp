@@ -71,14 +71,18 @@ std::string CanonPrinter::print(const Block& b, const CanonFrame& f) {
     case BlockKind::kArc: {
       feed();
       // The plane from the normal: G17 (X, Y; axis Z), G18 (Z, X; axis Y), G19 (Y, Z; axis X).
+      // (The normal in the program's frame: a G18/G19 arc of a rotated system is turned.)
+      const double rad = -f.rotation_deg * std::numbers::pi / 180.0;
+      const Vec3 nrm{b.normal.x * std::cos(rad) - b.normal.y * std::sin(rad),
+                     b.normal.x * std::sin(rad) + b.normal.y * std::cos(rad), b.normal.z};
       std::size_t p = 0, q = 1, n = 2;
-      double turn = b.normal.z;
-      if (b.normal.y != 0) {
+      double turn = nrm.z;
+      if (std::fabs(nrm.y) > 0.5) {
         p = 2, q = 0, n = 1;
-        turn = b.normal.y;
-      } else if (b.normal.x != 0) {
+        turn = nrm.y;
+      } else if (std::fabs(nrm.x) > 0.5) {
         p = 1, q = 2, n = 0;
-        turn = b.normal.x;
+        turn = nrm.x;
       }
       AxisVec c;
       c.set_xyz(b.center);

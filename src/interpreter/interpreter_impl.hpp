@@ -199,9 +199,16 @@ struct Interpreter::Impl final : LiveParameters {
   void arc(const AxisVec& target, bool ccw, std::uint32_t col);
   void probe_motion(const AxisVec& target, std::uint32_t col);  // G38.2 … G38.5 (probe.cpp)
   void emit_arc(const AxisVec& target, Vec2 c, bool ccw, std::uint32_t turns, std::uint32_t col);
+  // A G18/G19 arc in a rotated system turns with it (0 otherwise), about Z.
+  double arc_turn_deg() const;
+  static AxisVec turned(AxisVec p, double deg);  // X Y turned by deg about Z
+  void check_turned_arc_travel(const AxisVec& target, Vec2 c, bool ccw, std::uint32_t turns,
+                               std::uint32_t col);
   void check_arc_travel(const AxisVec& target, Vec2 c, double dr, bool ccw, std::uint32_t turns,
                         std::uint32_t col);
   void emit_motion(BlockKind kind, const AxisVec& target, std::uint32_t col);
+  PathMode block_path_mode() const;    // G9 or the modal path mode
+  void set_path_mode(Block& b) const;  // with G64's tolerance
   // The move to `target` sweeps lo … hi: an error if that leaves the travel (not while the
   // program continues beyond it after such an error, see recover()).
   void check_travel(const AxisVec& lo, const AxisVec& hi, const AxisVec& target, std::uint32_t col);

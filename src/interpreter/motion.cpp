@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "core/error.hpp"
 #include "interpreter/interpreter_impl.hpp"
@@ -42,15 +43,23 @@ void Interpreter::Impl::check_travel(const AxisVec& lo, const AxisVec& hi, const
   travel_failed_ = false;
 }
 
+// G9 makes this block's end an exact stop; else the modal G61/G61.1/G64 (with G64's P).
+PathMode Interpreter::Impl::block_path_mode() const {
+  return words_.group(GGroup::kExactStopOnce) != nullptr ? PathMode::kExactStop : modal_.path_mode;
+}
+
+void Interpreter::Impl::set_path_mode(Block& b) const {
+  b.path_mode = block_path_mode();
+  b.tolerance_mm = b.path_mode == PathMode::kBlend ? modal_.tolerance_mm : -1;
+}
+
 void Interpreter::Impl::emit_motion(BlockKind kind, const AxisVec& target, std::uint32_t col) {
   in_sync_ = false;
   Block b = base_block(kind);
   b.end = target;
   b.col = col;
   b.feed_mm_min = kind == BlockKind::kRapid ? 0 : move_feed_mm_min_;
-  b.path_mode =
-      words_.group(GGroup::kExactStopOnce) != nullptr ? PathMode::kExactStop : modal_.path_mode;
-  b.tolerance_mm = b.path_mode == PathMode::kBlend ? modal_.tolerance_mm : -1;
+  set_path_mode(b);
   b.smooth_tolerance_mm = modal_.smooth_tolerance_mm;
   out_.push_back(b);
 }
@@ -95,19 +104,19 @@ void Interpreter::Impl::arc(const AxisVec& target, bool ccw, std::uint32_t col) 
   move_feed_mm_min(0, col);  // the feed errors first, as for G1
   const PlaneAxes pa = plane_axes(modal_.plane);
   const double unit = modal_.length_unit_mm();
-  const Vec2 s{pos_[pa.first], pos_[pa.second]};
-  const Vec2 e{target[pa.first], target[pa.second]};
+  // In a rotated system (G10 L2 R) a G18/G19 arc lies in a vertical plane turned with the
+  // system: it is computed in the frame turned back by R, where that plane is the ZX or YZ
+  // plane, and turned to the machine when emitted.
+  const double turn = arc_turn_deg();
+  const AxisVec from = turned(pos_, -turn), to = turned(target, -turn);
+  const Vec2 s{from[pa.first], from[pa.second]};
+  const Vec2 e{to[pa.first], to[pa.second]};
   Vec2 c;
   double dr = 0;  // r1 − r0: an I J K arc whose radii differ within the tolerance is a spiral
   if (w.has(pa.normal_word)) {
     const char up = static_cast<char>(pa.normal_word - 'a' + 'A');
     fail(w[pa.normal_word].col,
          fmt::format("{} word given for an arc in the {} plane", up, plane_gcode(modal_.plane)));
-  }
-  if (modal_.plane != Plane::kXY && rotation_deg(modal_.coord_system) != 0) {
-    fail(col, fmt::format("{} arc in a rotated coordinate system (G10 L2 R): only G17 arcs turn "
-                          "with the rotation",
-                          g));
   }
   const bool has_first = w.has(pa.first_word), has_second = w.has(pa.second_word);
   if (w.has('r')) {
@@ -126,11 +135,13 @@ void Interpreter::Impl::arc(const AxisVec& target, bool ccw, std::uint32_t col) 
       AxisVec pc = to_program(pos_, tool_offset_);
       pc[pa.first] = i;
       pc[pa.second] = j;
-      const AxisVec mc = from_program(pc);
+      const AxisVec mc = turned(from_program(pc), -turn);
       c = {mc[pa.first], mc[pa.second]};
     } else {
-      // G91.1: relative to the start point, along the program's (rotated) axes
-      const Vec2 d = rotated({i, j}, rotation_deg(modal_.coord_system));
+      // G91.1: relative to the start point, along the program's (rotated) axes; a G18/G19
+      // arc's frame is already turned.
+      const Vec2 d = modal_.plane == Plane::kXY ? rotated({i, j}, rotation_deg(modal_.coord_system))
+                                                : Vec2{i, j};
       c = {s.a + d.a, s.b + d.b};
     }
     const double abs_tol = modal_.inch ? kArcAbsTolInch * 25.4 : kArcAbsTolMm;
@@ -157,7 +168,7 @@ void Interpreter::Impl::arc(const AxisVec& target, bool ccw, std::uint32_t col) 
   check_arc_travel(target, c, dr, ccw, turns, col);
   // G93's length: the arc's (the radius at the start, or a spiral's mean) with the helix rise.
   const double sweep_rad = arc_sweep(s, e, c, ccw, turns);
-  const double rise_mm = target[pa.normal] - pos_[pa.normal];
+  const double rise_mm = to[pa.normal] - from[pa.normal];
   const double mean_r = 0.5 * (std::hypot(s.a - c.a, s.b - c.b) + std::hypot(e.a - c.a, e.b - c.b));
   move_feed_mm_min_ = move_feed_mm_min(std::hypot(mean_r * sweep_rad, rise_mm), col);
 
@@ -178,17 +189,15 @@ void Interpreter::Impl::emit_arc(const AxisVec& target, Vec2 c, bool ccw, std::u
   b.col = col;
   b.end = target;
   b.feed_mm_min = move_feed_mm_min_;
-  b.path_mode =
-      words_.group(GGroup::kExactStopOnce) != nullptr ? PathMode::kExactStop : modal_.path_mode;
-  b.tolerance_mm = b.path_mode == PathMode::kBlend ? modal_.tolerance_mm : -1;
-  std::array<double, 3> centre{};
+  set_path_mode(b);
+  const double turn = arc_turn_deg();
+  AxisVec centre = turned(pos_, -turn);  // projected into the plane of the start point
   centre[pa.first] = c.a;
   centre[pa.second] = c.b;
-  centre[pa.normal] = pos_[pa.normal];  // projected into the plane of the start point
-  b.center = {centre[0], centre[1], centre[2]};
-  std::array<double, 3> normal{};
+  b.center = turned(centre, turn).xyz();
+  AxisVec normal;
   normal[pa.normal] = ccw ? 1.0 : -1.0;
-  b.normal = {normal[0], normal[1], normal[2]};
+  b.normal = turned(normal, turn).xyz();
   b.turns = turns;
   out_.push_back(b);
 }
@@ -199,6 +208,10 @@ void Interpreter::Impl::emit_arc(const AxisVec& target, Vec2 c, bool ccw, std::u
 // computed.
 void Interpreter::Impl::check_arc_travel(const AxisVec& target, Vec2 c, double dr, bool ccw,
                                          std::uint32_t turns, std::uint32_t col) {
+  if (arc_turn_deg() != 0) {
+    check_turned_arc_travel(target, c, ccw, turns, col);
+    return;
+  }
   const PlaneAxes pa = plane_axes(modal_.plane);
   const Vec2 s{pos_[pa.first], pos_[pa.second]};
   const Vec2 e{target[pa.first], target[pa.second]};
@@ -228,6 +241,53 @@ void Interpreter::Impl::check_arc_travel(const AxisVec& target, Vec2 c, double d
     lo[pa.second] = lo2.b;
     hi[pa.first] = hi2.a;
     hi[pa.second] = hi2.b;
+  }
+  check_travel(lo, hi, target, col);
+}
+
+double Interpreter::Impl::arc_turn_deg() const {
+  return modal_.plane == Plane::kXY ? 0.0 : rotation_deg(modal_.coord_system);
+}
+
+AxisVec Interpreter::Impl::turned(AxisVec p, double deg) {
+  const Vec2 xy = rotated({p[0], p[1]}, deg);
+  p[0] = xy.a;
+  p[1] = xy.b;
+  return p;
+}
+
+// A turned arc's travel (its extremes are not those of its plane's axes): the points of its
+// sweep every 0.25°, turned to the machine. Between two of them the arc bulges by at most
+// r·(1 − cos 0.125°) = 2.4e-6·r beyond their box.
+void Interpreter::Impl::check_turned_arc_travel(const AxisVec& target, Vec2 c, bool ccw,
+                                                std::uint32_t turns, std::uint32_t col) {
+  const PlaneAxes pa = plane_axes(modal_.plane);
+  const double turn = arc_turn_deg();
+  const AxisVec from = turned(pos_, -turn), to = turned(target, -turn);
+  const Vec2 s{from[pa.first], from[pa.second]}, e{to[pa.first], to[pa.second]};
+  const double r0 = std::hypot(s.a - c.a, s.b - c.b), r1 = std::hypot(e.a - c.a, e.b - c.b);
+  const double a0 = std::atan2(s.b - c.b, s.a - c.a);
+  // Extra turns sweep the whole circle: one turn at the larger radius stands for them.
+  const double sweep = turns > 0 ? 2 * std::numbers::pi : arc_sweep(s, e, c, ccw, 0);
+  const int n = std::max(8, static_cast<int>(std::ceil(sweep / (0.25 * std::numbers::pi / 180))));
+  AxisVec lo = target, hi = target;
+  for (std::size_t a = 0; a < kMaxAxes; ++a) {
+    lo[a] = std::min(pos_[a], target[a]);
+    hi[a] = std::max(pos_[a], target[a]);
+  }
+  for (int k = 0; k <= n; ++k) {
+    const double t = static_cast<double>(k) / n;
+    const double ang = a0 + (ccw ? 1 : -1) * sweep * t;
+    const double r = turns > 0 ? std::max(r0, r1) : r0 + (r1 - r0) * t;
+    AxisVec p = from;
+    p[pa.first] = c.a + r * std::cos(ang);
+    p[pa.second] = c.b + r * std::sin(ang);
+    p[pa.normal] = from[pa.normal] + (to[pa.normal] - from[pa.normal]) * t;
+    const AxisVec m = turned(p, turn);
+    for (std::size_t a = 0; a < kLinearAxes; ++a) {
+      lo[a] = std::min(lo[a], m[a]);
+      hi[a] = std::max(hi[a], m[a]);
+    }
   }
   check_travel(lo, hi, target, col);
 }

@@ -200,8 +200,7 @@ void Interpreter::Impl::emit_spline(const PlaneSpline& curve, const AxisVec& tar
   hi[kY] = std::max(hi[kY], fit.hi.y);
   check_travel(lo, hi, target, col);
   move_feed_mm_min_ = move_feed_mm_min(fit.length_mm, col);
-  const PathMode last_mode =
-      words_.group(GGroup::kExactStopOnce) != nullptr ? PathMode::kExactStop : modal_.path_mode;
+  const PathMode last_mode = block_path_mode();
   // Inside the curve the joints are tangent: no stop even in G61.1.
   const PathMode inner =
       modal_.path_mode == PathMode::kExactStop ? PathMode::kExactPath : modal_.path_mode;

@@ -170,9 +170,7 @@ void Interpreter::Impl::emit_sync_line(const AxisVec& target, double mm_rev, std
   b.feed_mm_min = feed;
   b.sync_mm_rev = mm_rev;
   b.override_fixed = true;
-  b.path_mode =
-      words_.group(GGroup::kExactStopOnce) != nullptr ? PathMode::kExactStop : modal_.path_mode;
-  b.tolerance_mm = b.path_mode == PathMode::kBlend ? modal_.tolerance_mm : -1;
+  set_path_mode(b);
   out_.push_back(b);
   in_sync_ = true;
   pos_ = target;

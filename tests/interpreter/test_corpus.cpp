@@ -49,8 +49,8 @@ const CorpusCase kCorpus[] = {
     {"linuxcnc-tp/arc_time.ngc", nullptr, 8},
     {"linuxcnc-tp/circle_small_segments_ncd.ngc", nullptr, 9990},
     {"linuxcnc-tp/full_xy.ngc", nullptr, 6},  // G10 L2 R60: a rotated G54
-    {"linuxcnc-tp/full_xz.ngc", "only G17 arcs turn with the rotation", 0},
-    {"linuxcnc-tp/full_yz.ngc", "only G17 arcs turn with the rotation", 0},
+    {"linuxcnc-tp/full_xz.ngc", nullptr, 3},  // G18 and G19 arcs turned with G10 L2 R60
+    {"linuxcnc-tp/full_yz.ngc", nullptr, 3},
     {"linuxcnc-tp/line-contouring-xz.ngc", nullptr, 1390},
     {"linuxcnc-tp/short_segments_0.001.ngc", nullptr, 2990},
     {"linuxcnc-tp/tight-corner-tolerance.ngc", nullptr, 220},

@@ -1,7 +1,8 @@
 // An I J K arc whose end radius differs from its start radius within the tolerance runs as one
 // spiral about the programmed centre, as in LinuxCNC: measured on the simulated machine's
 // interpolated path, every sample's distance to the programmed centre is the radius blended
-// linearly with the swept angle, r(t) = r0 + (r1 − r0)·t.
+// linearly with the swept angle, r(t) = r0 + (r1 − r0)·t. And a G18 arc in a coordinate system
+// rotated with G10 L2 R stays on its circle in the vertical plane turned with the system.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -57,6 +58,38 @@ TEST(SpiralArc, RadiusBlendsAlongTheSweepAboutTheProgrammedCentre) {
   const motion::Sample& last = keep.samples.back();
   EXPECT_NEAR(last.path_position[kX], 50.0, 1e-9);
   EXPECT_NEAR(last.path_position[kY], 0.0, 1e-9);
+}
+
+// G10 L2 R30: program X runs along (cos 30°, sin 30°). A G18 G2 of radius 20 from program
+// (30, 0, 0) about (30, 0, 20) to (50, 0, 20) is a quarter turn in the vertical plane through
+// that direction, about the machine axis (−sin 30°, cos 30°, 0).
+TEST(RotatedPlaneArc, G18ArcStaysOnItsCircleInTheTurnedPlane) {
+  const auto path = std::filesystem::path(CNCORE_TEST_TMP_DIR) / "rotated_g18_arc.ngc";
+  std::ofstream(path) << "G21 G90 G10 L2 P1 X5 Y-10 Z-60 R30\nG54 G0 X30 Y0 Z0\n"
+                         "G18 G2 X50 Z20 K20 F3000\nM30\n";
+  Keep keep;
+  sim::run_program(path.string(), default_machine_config(), {}, {&keep});
+  const double c30 = std::cos(std::numbers::pi / 6), s30 = std::sin(std::numbers::pi / 6);
+  auto machine = [&](double x, double z) { return Vec3{5 + x * c30, -10 + x * s30, -60 + z}; };
+  const Vec3 centre = machine(30, 20);
+  const Vec3 normal{-s30, c30, 0};
+  std::size_t on_arc = 0;
+  double worst_r = 0, worst_plane = 0;
+  for (const motion::Sample& s : keep.samples) {
+    if (s.line != 3) continue;
+    const Vec3 d = s.path_position.xyz() - centre;
+    worst_r = std::max(worst_r, std::fabs(norm(d) - 20));
+    worst_plane = std::max(worst_plane, std::fabs(dot(d, normal)));
+    ++on_arc;
+  }
+  ASSERT_GT(on_arc, 100u);
+  EXPECT_LT(worst_r, 1e-6);
+  EXPECT_LT(worst_plane, 1e-9);
+  const Vec3 end = keep.samples.back().path_position.xyz();
+  const Vec3 want = machine(50, 20);
+  EXPECT_NEAR(end.x, want.x, 1e-9);
+  EXPECT_NEAR(end.y, want.y, 1e-9);
+  EXPECT_NEAR(end.z, want.z, 1e-9);
 }
 
 }  // namespace
