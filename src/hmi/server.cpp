@@ -97,11 +97,13 @@ struct HttpServer::Impl {
   bool own_upload_dir = false;
   const std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
 
-  std::mutex mutex;  // guards view, program_serial, messages
+  std::mutex mutex;  // guards view, program_serial, messages, last_limits, machine_serial
   std::shared_ptr<const ProgramView> view = std::make_shared<ProgramView>();
   std::uint64_t program_serial = 0;
   std::deque<std::pair<std::uint64_t, std::string>> messages;  // the last few, with ids
   std::uint64_t message_serial = 0;
+  runtime::MachineLimits last_limits = controller.limits();
+  std::uint64_t machine_serial = 0;  // changes of the limits (the travel) since the start
 
   Impl(runtime::Controller& c, HttpOptions o) : controller(c), options(std::move(o)) {}
 
@@ -183,12 +185,25 @@ struct HttpServer::Impl {
       }
       seen = message_serial;
     }
+    // The travel a sender may have written ($130…): the page fetches /api/machine again when
+    // machine_serial changes.
+    const runtime::MachineLimits limits = controller.limits();
+    std::uint64_t travel_serial = 0;
+    {
+      const std::lock_guard lock(mutex);
+      if (limits != last_limits) {
+        last_limits = limits;
+        ++machine_serial;
+      }
+      travel_serial = machine_serial;
+    }
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return fmt::format(
-        R"(data: {{"status":{},"program_serial":{},"heightmap_version":{},"messages":{}}})"
+        R"(data: {{"status":{},"program_serial":{},"heightmap_version":{},"machine_serial":{},)"
+        R"("messages":{}}})"
         "\n\n",
         status_event_json(s, controller.machine(), v.get(), t), serial, s.heightmap_version,
-        fresh.dump());
+        travel_serial, fresh.dump());
   }
 
   void events(httplib::Response& res) {
@@ -227,7 +242,9 @@ struct HttpServer::Impl {
     server.Get("/api/session",
                [this](const httplib::Request& req, httplib::Response& res) { session(req, res); });
     server.Get("/api/machine", [this](const httplib::Request&, httplib::Response& res) {
-      res.set_content(machine_json(controller.machine()), kJson);
+      MachineConfig m = controller.machine();
+      runtime::apply_limits(m, controller.limits());  // the travel and speeds as they are now
+      res.set_content(machine_json(m), kJson);
     });
     server.Get("/api/program", [this](const httplib::Request&, httplib::Response& res) {
       std::shared_ptr<const ProgramView> v;

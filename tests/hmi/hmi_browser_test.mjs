@@ -9,6 +9,7 @@
 import { spawn } from 'node:child_process';
 import { createRequire } from 'node:module';
 import fs from 'node:fs';
+import net from 'node:net';
 import path from 'node:path';
 import assert from 'node:assert/strict';
 
@@ -70,6 +71,37 @@ function startServe(extra) {
     proc.on('exit', (code) => { clearInterval(t); reject(new Error(`cncore exited ${code}: ${log}`)); });
   });
   return { proc, url, log: () => log };
+}
+
+function freePort() {
+  return new Promise((resolve) => {
+    const srv = net.createServer();
+    srv.listen(0, '127.0.0.1', () => {
+      const { port } = srv.address();
+      srv.close(() => resolve(port));
+    });
+  });
+}
+
+// One line to cncore's Grbl TCP endpoint; its answer (ok / error:N).
+function grblLine(port, line) {
+  return new Promise((resolve, reject) => {
+    const sock = net.createConnection(port, '127.0.0.1');
+    let got = '', sent = false;
+    sock.on('data', (d) => {
+      got += d;
+      if (!sent && got.includes('Grbl 1.1h')) {  // the welcome line: the endpoint listens
+        sent = true;
+        sock.write(line + '\n');
+      }
+      const m = /(?:^|\n)(ok|error:\d+)\r?\n/.exec(got);
+      if (m) {
+        sock.end();
+        resolve(m[1]);
+      }
+    });
+    sock.on('error', reject);
+  });
 }
 
 async function stopServe(s) {
@@ -138,7 +170,8 @@ async function openPage(browser, url) {
 // ---- the operator's walk-through ----
 async function walkThrough(browser) {
   const traj = path.join(out, 'served.csv');
-  const serve = startServe(['--trajectory', traj]);
+  const grblPort = await freePort();
+  const serve = startServe(['--trajectory', traj, '--grbl-tcp', `127.0.0.1:${grblPort}`]);
   const url = await serve.url;
   step(`cncore serve at ${url}`);
   const { page, errors } = await openPage(browser, url);
@@ -218,6 +251,13 @@ async function walkThrough(browser) {
   assert.equal((await status(page)).job, before.job, 'nothing ran');
   step(`bad program: "${message}"`);
   await screenshot(page, 'hmi-error.png');
+  // A Grbl sender writes the X travel ($130): the page's travel box follows.
+  const xTravel = () => page.evaluate(() => window.hmi.view.box.max.x - window.hmi.view.box.min.x);
+  const travelBefore = await xTravel();
+  assert.equal(await grblLine(grblPort, '$130=250'), 'ok');
+  await page.waitForFunction(() => window.hmi.view.box.max.x - window.hmi.view.box.min.x === 250,
+                             null, { timeout: 30000 });
+  step(`travel box: X ${travelBefore} → 250 mm after a sender's $130=250`);
   assert.deepEqual(errors, [], 'no script errors on the page');
   await page.close();
   await stopServe(serve);

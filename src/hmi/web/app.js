@@ -10,6 +10,7 @@ const fromUrl = new URLSearchParams(location.hash.slice(1)).get('token');
 if (fromUrl) { token = fromUrl; sessionStorage.setItem('cncore-token', token); }
 
 let machine = null, program = null, programSerial = -1, programLines = [], errorLine = 0;
+let machineSerial = 0;  // the server's count of travel changes since it started
 let lastStatus = null, shownLine = -1, canControl = false;
 let heightmapVersion = 0, heightmapFetching = false, heightmapFetchedAt = 0;
 const view = new View3D($('view3d'));
@@ -167,6 +168,13 @@ function onStatus(msg) {
   view.setTool([s.machine.x ?? 0, s.machine.y ?? 0, s.machine.z ?? 0], (s.feed_mm_min - lo) / (hi - lo));
   plots.push(s.t, s);
   maybeFetchHeightmap(msg.heightmap_version);
+  if (msg.machine_serial !== machineSerial) {
+    machineSerial = msg.machine_serial;
+    fetch('/api/machine').then((r) => r.json()).then((m) => {
+      machine = m;
+      view.setTravel(m);
+    });
+  }
 }
 
 function syncSlider(id, value) {

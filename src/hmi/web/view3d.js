@@ -96,6 +96,21 @@ export class View3D {
   }
 
   setMachine(machine) {
+    this.setTravel(machine);
+    if (machine.stock) {  // [stock]: the raw part, translucent
+      const [sx, sy, sz] = machine.stock.size_mm, [mx, my, mz] = machine.stock.min_mm;
+      const g = new THREE.BoxGeometry(sx, sy, sz);
+      g.translate(mx + sx / 2, my + sy / 2, mz + sz / 2);
+      this.stock = new THREE.Mesh(g, new THREE.MeshBasicMaterial(
+          { color: 0x8d9bb0, transparent: true, opacity: 0.18, depthWrite: false }));
+      this.scene.add(this.stock);
+      this.stockZ = [mz, mz + sz];
+    }
+    this.setView('iso');
+  }
+
+  // The travel box, again when a sender has written the travel ($130…).
+  setTravel(machine) {
     const min = new THREE.Vector3(), max = new THREE.Vector3();
     const idx = { X: 'x', Y: 'y', Z: 'z' };
     for (const a of machine.axes) {
@@ -107,16 +122,6 @@ export class View3D {
     if (this.boxHelper) this.scene.remove(this.boxHelper);
     this.boxHelper = new THREE.Box3Helper(this.box, 0x4a5260);
     this.scene.add(this.boxHelper);
-    if (machine.stock) {  // [stock]: the raw part, translucent
-      const [sx, sy, sz] = machine.stock.size_mm, [mx, my, mz] = machine.stock.min_mm;
-      const g = new THREE.BoxGeometry(sx, sy, sz);
-      g.translate(mx + sx / 2, my + sy / 2, mz + sz / 2);
-      this.stock = new THREE.Mesh(g, new THREE.MeshBasicMaterial(
-          { color: 0x8d9bb0, transparent: true, opacity: 0.18, depthWrite: false }));
-      this.scene.add(this.stock);
-      this.stockZ = [mz, mz + sz];
-    }
-    this.setView('iso');
   }
 
   // The program as /api/program gives it; returns [lo, hi], the feed range of the colour scale.
