@@ -101,6 +101,8 @@ const CorpusProgram kPrograms[] = {
     {"linuxcnc-tp/arc_time.ngc", true, {}, {}, {}, true},
     {"linuxcnc-tp/circle_small_segments_ncd.ngc", true, {}, {}, {}, true},
     {"linuxcnc-tp/full_xy.ngc"},
+    {"linuxcnc-tp/full_xz.ngc"},  // a G19 arc turned with G10 L2 R60
+    {"linuxcnc-tp/full_yz.ngc"},  // G18 arcs turned likewise
     {"linuxcnc-tp/line-contouring-xz.ngc", true, {}, {}, {}, true},
     {"linuxcnc-tp/short_segments_0.001.ngc", true, {}, {}, {}, true},
     {"linuxcnc-tp/tight-corner-tolerance.ngc", true, {}, {}, {}, true},
