@@ -58,7 +58,8 @@ struct Block {
   bool override_fixed = false;
   // Spindle-synchronised motion (G33, G33.1, G76): the path advances sync_mm_rev per spindle
   // revolution, so feed_mm_min = sync_mm_rev · rpm and override_fixed is set (the feed override
-  // does not act, as in LinuxCNC). 0: a move at its programmed feed.
+  // does not act, as in LinuxCNC). 0: a move at its programmed feed. On a zero kDwell: the wait
+  // for the spindle's index pulse before such moves.
   double sync_mm_rev = 0;
 
   // Arc / helix (kArc). The motion turns counter-clockwise about `normal` (right-hand rule):

@@ -94,7 +94,8 @@ std::string CanonPrinter::print(const Block& b, const CanonFrame& f) {
       break;
     }
     case BlockKind::kDwell:
-      out += fmt::format("DWELL({})\n", num(b.dwell_s));
+      // The index wait before synchronised moves is below the canonical interface in LinuxCNC.
+      if (b.sync_mm_rev <= 0) out += fmt::format("DWELL({})\n", num(b.dwell_s));
       break;
     case BlockKind::kAux:
       break;

@@ -33,8 +33,8 @@ TEST(Threading, G33FollowsTheSpindleAndStartsFromRest) {
   std::vector<Block> sync;
   std::size_t waits = 0;
   for (const Block& x : b) {
-    if (x.sync_mm_rev > 0) sync.push_back(x);
-    if (x.kind == BlockKind::kDwell && x.dwell_s == 0) ++waits;
+    if (x.kind == BlockKind::kLine && x.sync_mm_rev > 0) sync.push_back(x);
+    if (x.kind == BlockKind::kDwell && x.dwell_s == 0 && x.sync_mm_rev > 0) ++waits;
   }
   ASSERT_EQ(sync.size(), 2U);
   EXPECT_DOUBLE_EQ(sync[0].feed_mm_min, 1.5 * 400);
@@ -43,12 +43,28 @@ TEST(Threading, G33FollowsTheSpindleAndStartsFromRest) {
   EXPECT_EQ(waits, 1U) << "one index wait before the series, none between its moves";
 }
 
+// As rs274 lists them: the pitch before the synchronised moves, no DWELL for the index wait.
+TEST(Threading, CanonicalListingHasTheSyncCallsAndNoIndexWait) {
+  Interpreter in(Interpreter::FromText{}, "G18 G21 G90 S400 M3\nG0 X10 Z5\nG33 Z-40 K1.5\nG0 X20\n",
+                 "thread.ngc", test_machine(), Options{});
+  CanonPrinter p;
+  std::string canon;
+  Block b;
+  while (in.next(b)) canon += p.print(b, in.canon_frame());
+  EXPECT_EQ(canon,
+            "STRAIGHT_TRAVERSE(10.0000, 0.0000, 5.0000, 0.0000, 0.0000, 0.0000)\n"
+            "START_SPEED_FEED_SYNC(1.500000,0)\n"
+            "STRAIGHT_FEED(10.0000, 0.0000, -40.0000, 0.0000, 0.0000, 0.0000)\n"
+            "STOP_SPEED_FEED_SYNCH()\n"
+            "STRAIGHT_TRAVERSE(20.0000, 0.0000, -40.0000, 0.0000, 0.0000, 0.0000)\n");
+}
+
 TEST(Threading, RigidTapGoesInReversesAndComesBackFaster) {
   const auto b = blocks("G17 G21 G90 S300 M3\nG0 X5 Y5 Z2\nG33.1 Z-10 K1.25 I2\nG0 Z20\n");
   std::vector<Block> sync;
   std::vector<double> m;
   for (const Block& x : b) {
-    if (x.sync_mm_rev > 0) sync.push_back(x);
+    if (x.kind == BlockKind::kLine && x.sync_mm_rev > 0) sync.push_back(x);
     if (x.kind == BlockKind::kAux && x.aux_letter == 'M') m.push_back(x.aux_value);
   }
   ASSERT_EQ(sync.size(), 2U);
@@ -66,7 +82,9 @@ TEST(Threading, G76PassesCutTheDegressionDepthsThenTheSpringPasses) {
   const auto b = blocks("G18 G21 G90 S500 M3\nG0 X20 Z5\nG76 P2 Z-30 I-1 J0.1 K1.2 R2 H2\n");
   std::vector<double> cut_x;
   for (const Block& x : b) {
-    if (x.sync_mm_rev > 0 && x.start[0] == x.end[0]) cut_x.push_back(x.end[0]);
+    if (x.kind == BlockKind::kLine && x.sync_mm_rev > 0 && x.start[0] == x.end[0]) {
+      cut_x.push_back(x.end[0]);
+    }
   }
   std::vector<double> want;
   for (int n = 1; 0.1 * std::sqrt(n) < 1.2; ++n) want.push_back(19 - 0.1 * std::sqrt(n));
