@@ -6,14 +6,13 @@ machine_serial and GET /api/machine (what the page fetches on it) has the new X 
 import json
 import os
 import re
-import socket
 import subprocess
 import sys
 import time
 import urllib.request
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "grbl"))
-from grbl_client import Client  # noqa: E402
+from grbl_client import Client, _free_port  # noqa: E402
 
 CNCORE = sys.argv[1]
 
@@ -21,14 +20,6 @@ CNCORE = sys.argv[1]
 def fail(why):
     print("FAIL:", why)
     sys.exit(1)
-
-
-def free_port():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
 
 
 def x_travel(url):
@@ -53,7 +44,7 @@ def machine_serials(url, until, seconds=10):
     return seen
 
 
-port = free_port()
+port = _free_port()
 proc = subprocess.Popen([CNCORE, "serve", "--no-state", "--no-realtime", "--http", "127.0.0.1:0",
                          "--grbl-tcp", f"127.0.0.1:{port}"],
                         stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
