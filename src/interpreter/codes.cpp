@@ -114,9 +114,15 @@ CodeInfo g_code_info(int code10) {
     case 640:
       return ok(GGroup::kPathControl, "blending mode");
     case 700:
+      return ok(GGroup::kMotion, "lathe finishing cycle");
     case 710:
+    case 711:
+    case 712:
+      return ok(GGroup::kMotion, "lathe roughing cycle");
     case 720:
-      return no(GGroup::kMotion, "lathe finishing cycles");
+    case 721:
+    case 722:
+      return ok(GGroup::kMotion, "lathe facing cycle");
     case 730:
     case 740:
     case 810:

@@ -126,7 +126,11 @@ void Interpreter::Impl::step() {
   }
   parse_words(pos);
   started_ = true;
-  execute_words();
+  if (lathe_capture_ != nullptr) {
+    capture_profile_block();  // a line of a lathe cycle's profile (lathe_cycles.cpp)
+  } else {
+    execute_words();
+  }
 }
 
 // An E word at t[pos]. Right after the digits of an axis or parameter value ("X1e400") it is
@@ -189,9 +193,7 @@ void Interpreter::Impl::parse_words(std::size_t pos) {
       case 'e':
         exponent_or_unknown(pos, value_start, last_letter);  // G76 reads E; an exponent fails
         break;
-      case 'u':
       case 'v':
-      case 'w':
         fail(col, fmt::format("{} axis is not supported (cncore axes: X Y Z A B C)", upper));
       case 'g':
       case 'm': {
@@ -292,7 +294,6 @@ void Interpreter::Impl::emit_aux(char letter, double value, bool waits) {
 
 void Interpreter::Impl::execute_words() {
   const Words& w = words_;
-
   refuse_unsupported();
   apply_lathe_mode();
 
@@ -408,7 +409,7 @@ void Interpreter::Impl::execute_motion(const Words::Code* nonmodal, bool axes_fo
       modal_.motion == Motion::kCubicSpline || modal_.motion == Motion::kQuadSpline;
   const bool sync_mode =
       modal_.motion == Motion::kSpindleSync || modal_.motion == Motion::kRigidTap;
-  if (!arc_mode && !threading_block()) {
+  if (!arc_mode && !threading_block() && !lathe_cycle_block()) {
     for (char c : {'i', 'j', 'k', 'r'}) {
       const bool sync_word =
           sync_mode && (c == 'k' || (c == 'i' && modal_.motion == Motion::kRigidTap));
@@ -435,6 +436,10 @@ void Interpreter::Impl::execute_motion(const Words::Code* nonmodal, bool axes_fo
     if (threading_block()) {
       threading_cycle(motion_word->col);
       modal_.motion = Motion::kNone;  // G76 acts on its own block
+      return;
+    }
+    if (lathe_cycle_block()) {
+      lathe_cycle(motion_word->col);
       return;
     }
     const bool cycle_words = cycle_mode && (w.has('r') || motion_word != nullptr);
@@ -513,7 +518,16 @@ void Interpreter::Impl::refuse_unsupported() const {
       fail(m.col, fmt::format("{} {} is not supported", code_text('M', m.code10), info.name));
     }
   }
-  if (w.has('e') && !threading_block()) fail(w['e'].col, "unknown word 'E'");  // G76's only
+  // E: G76's taper and G70's last allowance only; U W: the lathe cycles' allowances.
+  const Words::Code* motion = w.group(GGroup::kMotion);
+  const bool finishing = motion != nullptr && motion->code10 == 700;
+  if (w.has('e') && !threading_block() && !finishing) fail(w['e'].col, "unknown word 'E'");
+  for (const char c : {'u', 'w'}) {
+    if (w.has(c) && !lathe_cycle_block()) {
+      fail(w[c].col, fmt::format("{} axis is not supported (cncore axes: X Y Z A B C)",
+                                 static_cast<char>(c - 'a' + 'A')));
+    }
+  }
 }
 
 // Step 10 of the order of execution: M52 adaptive feed control (spec 04), P1 or no P on, P0

@@ -14,6 +14,7 @@
 #include "interpreter/cutter_comp.hpp"
 #include "interpreter/expression.hpp"
 #include "interpreter/interpreter.hpp"
+#include "interpreter/lathe_profile.hpp"
 #include "interpreter/lexer.hpp"
 #include "interpreter/modal_state.hpp"
 #include "interpreter/parameters.hpp"
@@ -23,6 +24,7 @@ namespace cncore::interp {
 
 class PlaneSpline;
 struct ThreadPass;
+struct LatheCapture;
 
 inline constexpr std::size_t kLinearAxes = 3;
 inline constexpr double kZeroMoveMm = 1e-9;  // moves shorter than this are not emitted
@@ -199,6 +201,9 @@ struct Interpreter::Impl final : LiveParameters {
   void arc(const AxisVec& target, bool ccw, std::uint32_t col);
   void probe_motion(const AxisVec& target, std::uint32_t col);  // G38.2 … G38.5 (probe.cpp)
   void emit_arc(const AxisVec& target, Vec2 c, bool ccw, std::uint32_t turns, std::uint32_t col);
+  // An arc from pos_ about `c` (plane coordinates, radius growing by dr): travel, feed, block.
+  void arc_move(const AxisVec& target, Vec2 c, double dr, bool ccw, std::uint32_t turns,
+                std::uint32_t col);
   // A G18/G19 arc in a rotated system turns with it (0 otherwise), about Z.
   double arc_turn_deg() const;
   static AxisVec turned(AxisVec p, double deg);  // X Y turned by deg about Z
@@ -266,6 +271,19 @@ struct Interpreter::Impl final : LiveParameters {
   void threading_pass(const ThreadPass& t, double depth, std::uint32_t col);
   void threading_cycle(std::uint32_t col);
   bool in_sync_ = false;  // the last move emitted followed the spindle
+
+  // lathe_cycles.cpp: G70, G71, G72 (the profile's subroutine is read while lathe_capture_ is
+  // set: its lines add to the profile instead of executing)
+  bool lathe_cycle_block() const;
+  void lathe_cycle(std::uint32_t col);
+  lathe::Profile read_profile(const Words::Value& q, lathe::Pt from);
+  void capture_profile_block();
+  lathe::Pt profile_centre(lathe::Pt from, lathe::Pt end) const;
+  lathe::Pt program_zx() const;  // program position in program units, X a radius
+  AxisVec lathe_target(lathe::Pt p) const;
+  void lathe_move(bool rapid, lathe::Pt end, std::uint32_t col);
+  void lathe_arc(bool ccw, lathe::Pt centre, lathe::Pt end, std::uint32_t col);
+  LatheCapture* lathe_capture_ = nullptr;
 
   // canned_cycles.cpp
   void canned_cycle(std::uint32_t col);

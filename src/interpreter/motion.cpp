@@ -165,6 +165,16 @@ void Interpreter::Impl::arc(const AxisVec& target, bool ccw, std::uint32_t col) 
     }
     turns = static_cast<std::uint32_t>(p) - 1;
   }
+  arc_move(target, c, dr, ccw, turns, col);
+}
+
+void Interpreter::Impl::arc_move(const AxisVec& target, Vec2 c, double dr, bool ccw,
+                                 std::uint32_t turns, std::uint32_t col) {
+  const PlaneAxes pa = plane_axes(modal_.plane);
+  const double turn = arc_turn_deg();
+  const AxisVec from = turned(pos_, -turn), to = turned(target, -turn);
+  const Vec2 s{from[pa.first], from[pa.second]};
+  const Vec2 e{to[pa.first], to[pa.second]};
   check_arc_travel(target, c, dr, ccw, turns, col);
   // G93's length: the arc's (the radius at the start, or a spiral's mean) with the helix rise.
   const double sweep_rad = arc_sweep(s, e, c, ccw, turns);

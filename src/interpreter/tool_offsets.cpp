@@ -189,7 +189,7 @@ void Interpreter::Impl::cutter_comp(double unit) {
   refuse_with_comp();
   const Words::Code* g = w.group(GGroup::kCutterComp);
   if (g == nullptr) {
-    if (w.has('d') && w.group(GGroup::kSpindleMode) == nullptr) {
+    if (w.has('d') && w.group(GGroup::kSpindleMode) == nullptr && !lathe_cycle_block()) {
       fail(w['d'].col, "D word without G41, G42, G41.1, G42.1 or G96");
     }
     return;
@@ -244,7 +244,9 @@ void Interpreter::Impl::refuse_with_comp() const {
   if (code10 == 730 || code10 == 740 || (code10 >= 810 && code10 <= 890)) {
     refuse(motion != nullptr ? motion->col : w.first_col, "a canned cycle");
   }
-  if (code10 == 760 || code10 == 331) refuse(motion->col, code_text('G', code10));
+  if (code10 == 760 || code10 == 331 || (code10 >= 710 && code10 <= 722)) {
+    refuse(motion->col, code_text('G', code10));
+  }
 }
 
 }  // namespace cncore::interp
