@@ -123,12 +123,15 @@ std::size_t SummaryObserver::match(std::uint32_t line, Vec3 pos) const {
   std::size_t j = 0;
   while (j < n && pending_[j].line != line) ++j;
   if (j == n) return kNone;
-  while (j + 1 < n && pending_[j + 1].line == line && pending_[j].motion &&
-         pending_[j + 1].motion) {
+  while (pending_[j].motion) {
+    // The line's next move; its dwells (a cycle's, a thread's index wait) pass with it.
+    std::size_t k = j + 1;
+    while (k < n && pending_[k].line == line && !pending_[k].motion) ++k;
+    if (k >= n || pending_[k].line != line) break;
     const ProgrammedMove::Nearest here = pending_[j].move.nearest(pos);
     if (here.along_mm < pending_[j].move.length_mm() - 1e-9) break;
-    if (pending_[j + 1].move.nearest(pos).distance_mm > here.distance_mm + 1e-9) break;
-    ++j;
+    if (pending_[k].move.nearest(pos).distance_mm > here.distance_mm + 1e-9) break;
+    j = k;
   }
   return j;
 }
@@ -145,11 +148,21 @@ void SummaryObserver::pass(std::size_t j, double t_s) {
 }
 
 // Distance from the set-point to the programmed path near the tool: the moves passed within
-// the window (newest first), the block under the tool (pending_[j]) and the two after it.
-// Moves whose bounding sphere lies farther than the best so far are skipped.
+// the window (newest first), the block under the tool (pending_[j]), the two after it and the
+// other moves of its line. A line whose moves retrace each other (a canned cycle's pecks, a
+// lathe cycle's passes) can hold the match on an earlier move while the tool is on a later
+// one: the tool is on one of the line's moves. Moves whose bounding sphere lies farther than
+// the best so far are skipped.
 double SummaryObserver::programmed_distance(Vec3 pos, std::size_t j, double t_s) const {
   double best = std::numeric_limits<double>::infinity();
-  const std::size_t ahead = std::min(pending_.size(), (j == kNone ? 0 : j) + 3);
+  std::size_t ahead = std::min(pending_.size(), (j == kNone ? 0 : j) + 3);
+  if (const std::size_t from = j == kNone ? 0 : j; from < pending_.size()) {
+    // (kNone: the tool is on a line without moves, an M2 after a cycle: the line before.)
+    const std::size_t n = std::min(pending_.size(), kMatchWindow);
+    std::size_t e = from;
+    while (e < n && pending_[e].line == pending_[from].line) ++e;
+    ahead = std::max(ahead, e);
+  }
   for (std::size_t k = 0; k < ahead; ++k) {
     const Pending& b = pending_[k];
     if (b.motion && b.move.distance_bound(pos) < best) {

@@ -539,6 +539,23 @@ TEST_F(Cli, ALineOfManyBlocksIsMeasuredAgainstEachOfThem) {
   EXPECT_GT(j.at("blocks").get<int>(), 10);
 }
 
+TEST_F(Cli, CyclesWhoseMovesRetraceEachOtherAreMeasuredAgainstThem) {
+  // A peck drilling cycle, a threading cycle and a lathe roughing cycle: one line each, whose
+  // moves run back over each other (and an index wait between the threading passes). The
+  // tool stays on the programmed moves of its line.
+  for (const char* program :
+       {"G17 G21 G90 F300\nG0 X0 Y0 Z5\nG83 X10 Y10 Z-20 R2 Q3\nG80\nG0 Z10\nM2\n",
+        "G18 G21 G90 S300 M3\nG0 X12 Z5\nG76 P2 Z-30 I-1 J0.5 K1.2 R1 H1\nM2\n",
+        "o10 sub\nG1 X5 Z0\nZ-10\nG2 X8 Z-13 I3 K0\nG1 X10\nZ-25\no10 endsub\n"
+        "G18 G21 G90 G8 F200\nG0 X15 Z5\nG71 Q10 X12 Z2 D0.2 I1 R0.5\nM2\n"}) {
+    write_file(dir_ / "c.ngc", program);
+    const Result r = run("run c.ngc --summary c.json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(slurp(dir_ / "c.json"));
+    EXPECT_LE(j.at("max_contour_error_mm").get<double>(), 0.01) << program;
+  }
+}
+
 TEST_F(Cli, StopModeIsSlowerThanLookahead) {
   const Result a = run("run " + example("seed-line-arc-line.ngc") + " --summary a.json");
   const Result b =
