@@ -140,6 +140,12 @@ void read_interpreter(const Reader& r, const toml::table& t, MachineConfig& c) {
           static_cast<std::uint64_t>(r.integer_in(key, node, name, 1, 1000000000000));
     } else if (k == "max_call_depth") {
       c.max_call_depth = static_cast<std::uint32_t>(r.integer_in(key, node, name, 1, 10000));
+    } else if (k == "parameter_units") {
+      const auto* s = node.as_string();
+      if (s == nullptr || (s->get() != "mm" && s->get() != "inch")) {
+        r.fail(key.source(), fmt::format("{} must be \"mm\" or \"inch\"", name));
+      }
+      c.parameters_inch = s->get() == "inch";
     } else {
       r.unknown(key, name);
     }
@@ -588,6 +594,8 @@ std::string machine_config_to_toml(const MachineConfig& c) {
        "runaway guard for the whole program: loop passes + calls (1 … 1e12)");
   line("max_call_depth = " + std::to_string(c.max_call_depth),
        "O-word subroutine call nesting (1 … 10000)");
+  line(fmt::format("parameter_units = \"{}\"", c.parameters_inch ? "inch" : "mm"),
+       "unit of the offset parameters #5161…#5389 as programs read and write them");
 
   o += "\n[tables]\n";
   line(fmt::format("cancel_mode = \"{}\"",

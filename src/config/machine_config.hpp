@@ -128,6 +128,10 @@ struct MachineConfig {
   // [interpreter]
   std::uint64_t max_loop_iterations = 1000000;  // runaway-loop guard for while/do/repeat
   std::uint32_t max_call_depth = 64;            // O-word call nesting
+  // The length unit of the offset parameters as programs read and write them (#5161…,
+  // #5181…, #5211…, #5221…): LinuxCNC keeps them in the machine's units ([TRAJ]LINEAR_UNITS),
+  // whatever G20/G21 is active. cncore stores mm; true: programs see them in inches.
+  bool parameters_inch = false;
   // Runaway guard for the whole program: loop passes, subroutine calls and M98 repeats summed.
   std::uint64_t max_total_iterations = 10000000;
 

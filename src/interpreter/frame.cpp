@@ -99,6 +99,10 @@ AxisVec Interpreter::Impl::target_from_words(bool machine_coords) const {
 // #<_abs_x>…#<_abs_c>: in machine coordinates without the tool offset (program units).
 bool Interpreter::Impl::read_live(int number, double& value) const {
   auto unit = [&](std::size_t a) { return is_rotary(a) ? 1.0 : modal_.length_unit_mm(); };
+  if (machine_.parameters_inch && offset_length_param(number)) {
+    value = params_.stored(number) / 25.4;
+    return true;
+  }
   if (number >= kParamPosition && number < kParamPosition + static_cast<int>(kMaxAxes)) {
     const auto axis = static_cast<std::size_t>(number - kParamPosition);
     value = to_program(pos_, tool_offset_)[axis] / unit(axis);
@@ -111,6 +115,15 @@ bool Interpreter::Impl::read_live(int number, double& value) const {
     return true;
   }
   return read_tool_param(number, value);
+}
+
+// The X Y Z slots of the G28/G30 homes, the G92 offset and the work offsets: lengths kept in
+// mm, read and written by programs in the unit of machine_.parameters_inch.
+bool offset_length_param(int n) {
+  auto xyz_of = [&](int base) { return n >= base && n < base + 3; };
+  if (xyz_of(kParamG28Home) || xyz_of(kParamG30Home) || xyz_of(kParamG92)) return true;
+  const int k = n - kParamWorkOffsets;
+  return k >= 0 && k < 20 * 9 && k % 20 < 3;
 }
 
 bool Interpreter::Impl::read_live_named(std::string_view name, double& value) const {

@@ -260,7 +260,8 @@ void Interpreter::Impl::parse_words(std::size_t pos) {
   // "#1=2 #2=#1" sets #2 to the old value of #1.
   for (const Words::Assignment& a : w.assignments) {
     if (a.ref.number > 0) {
-      params_.set_numbered(a.ref.number, a.value);
+      const bool inch = machine_.parameters_inch && offset_length_param(a.ref.number);
+      params_.set_numbered(a.ref.number, inch ? a.value * 25.4 : a.value);
     } else {
       params_.set_named(a.ref.name, a.value);
     }

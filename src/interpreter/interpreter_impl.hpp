@@ -59,6 +59,8 @@ inline constexpr int kParamProbeTripped = 5070;     // 1: the last G38 move trip
 // work_param(system, kRotationSlot), #5230 for G54.
 inline constexpr std::size_t kRotationSlot = 9;
 
+bool offset_length_param(int n);  // see frame.cpp
+
 inline int work_param(int system, std::size_t axis) {
   return kParamWorkOffsets + 20 * (system - 1) + static_cast<int>(axis);
 }

@@ -131,7 +131,7 @@ void Interpreter::Impl::go_home(int code10) {
   for (std::size_t a = 0; a < kMaxAxes; ++a) {
     if (!machine_.axes[a].enabled) continue;
     if (!any || words_[kAxisWords[a]].present)
-      home[a] = params_.numbered(base + static_cast<int>(a));
+      home[a] = params_.stored(base + static_cast<int>(a));  // mm, whatever parameter_units
   }
   line_motion(home, col);
   modal_.motion = saved;

@@ -61,6 +61,7 @@ TEST(MachineConfig, PrintedCustomParsesBackEqual) {
   c.bound_resultant_accel = true;
   c.max_loop_iterations = 123456789012;
   c.max_call_depth = 9;
+  c.parameters_inch = true;
   c.max_total_iterations = 98765;
   c.table_cancel_mode = TableCancelMode::kRebase;
   c.table_slow_to_fit = true;
@@ -196,6 +197,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"[interpreter]\nmax_loop_iterations = 0\n", 2, 1,
                 "interpreter.max_loop_iterations"},
         BadCase{"[interpreter]\nmax_call_depth = -3\n", 2, 1, "interpreter.max_call_depth"},
+        BadCase{"[interpreter]\nparameter_units = \"furlong\"\n", 2, 1,
+                "interpreter.parameter_units"},
         BadCase{"[tables]\ncancel_mode = \"keep\"\n", 2, 1, "tables.cancel_mode"},
         BadCase{"[tables]\ncancel_mode = 1\n", 2, 1, "tables.cancel_mode"},
         BadCase{"[tables]\nslow_to_fit = \"yes\"\n", 2, 1, "tables.slow_to_fit"},

@@ -133,9 +133,11 @@ std::vector<Case> all_cases() {
   return cases;
 }
 
-// rs274 has no machine: no travel limits, and the A B C axes exist.
+// rs274 has no machine: no travel limits, and the A B C axes exist. Without an INI file its
+// offset parameters are in inches.
 MachineConfig unbounded_machine() {
   MachineConfig m = test_machine();
+  m.parameters_inch = true;
   for (std::size_t a = 0; a < kMaxAxes; ++a) {
     m.axes[a].enabled = true;
     m.axes[a].rotary = a >= 3;

@@ -231,5 +231,27 @@ TEST(Recovery, AnErrorAtTheEndOfTheProgramEndsIt) {
   EXPECT_EQ(errors, 1);
 }
 
+// [interpreter] parameter_units: programs read and write the offset parameters in the
+// machine's unit whatever G20/G21 is active; the offsets themselves are the same.
+TEST(ParameterUnits, OffsetParametersAreInTheMachinesUnit) {
+  for (const bool inch : {false, true}) {
+    MachineConfig m = test_machine();
+    m.parameters_inch = inch;
+    std::vector<std::string> said;
+    Options o;
+    o.on_message = [&](const std::string& text) { said.push_back(text); };
+    Interpreter in(Interpreter::FromText{},
+                   "G20 G10 L2 P1 X1\n(debug,#5221)\nG21\n(debug,#5221)\n#5222=2\n"
+                   "G21 G90 G0 X0 Y0\n",
+                   "p.ngc", m, o);
+    Block b, last;
+    while (in.next(b)) last = b;
+    const std::string one = inch ? "1.000000" : "25.400000";
+    EXPECT_EQ(said, (std::vector<std::string>{one, one}));
+    EXPECT_NEAR(last.end[kX], 25.4, 1e-9) << "G10 L2 X1 in G20 is 25.4 mm either way";
+    EXPECT_NEAR(last.end[kY], inch ? 50.8 : 2, 1e-9) << "#5222=2 in the parameters' unit";
+  }
+}
+
 }  // namespace
 }  // namespace cncore::interp::test
