@@ -192,6 +192,8 @@ CodeInfo m_code_info(int code10) {
       return okm(MGroup::kSpindle, "spindle on");
     case 50:
       return okm(MGroup::kSpindle, "spindle stop");
+    case 190:
+      return okm(MGroup::kSpindle, "spindle orient");
     case 60:
       return okm(MGroup::kToolChange, "tool change");
     case 610:

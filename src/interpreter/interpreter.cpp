@@ -311,6 +311,7 @@ void Interpreter::Impl::execute_words() {
   if (const auto* m = w.mgroup(MGroup::kToolChange)) change_tool(*m);
   // 9 spindle
   if (const auto* m = w.mgroup(MGroup::kSpindle)) {
+    if (m->code10 == 190) orient_words();
     modal_.spindle_dir = m->code10 == 30 ? 1 : m->code10 == 40 ? -1 : 0;
     emit_aux('M', m->code10 / 10.0, true);
   }
@@ -415,8 +416,9 @@ void Interpreter::Impl::execute_motion(const Words::Code* nonmodal, bool axes_fo
       const bool sync_word =
           sync_mode && (c == 'k' || (c == 'i' && modal_.motion == Motion::kRigidTap));
       const bool back_bore_word = cycle_mode && modal_.cycle == 870 && c != 'r';
+      const bool orient_word = c == 'r' && w.has_m(190);  // M19 R: the angle
       if (w.has(c) && !(c == 'r' && (nm == 100 || cycle_mode)) && !(spline_ij && c != 'r') &&
-          !sync_word && !back_bore_word) {
+          !sync_word && !back_bore_word && !orient_word) {
         fail(w[c].col, fmt::format("{} word without G2/G3", static_cast<char>(c - 'a' + 'A')));
       }
     }

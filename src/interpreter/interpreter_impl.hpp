@@ -263,6 +263,7 @@ struct Interpreter::Impl final : LiveParameters {
   double work_radius_mm(const AxisVec& m) const;
   double css_rpm(double radius_mm, std::uint32_t col) const;
   void spindle_speed_words(double unit);
+  void orient_words() const;  // M19 R Q P
   void css_update(const AxisVec& at, std::uint32_t col);
   void css_line(const AxisVec& target, std::uint32_t col);
   double sync_rpm(std::uint32_t col, const char* what) const;

@@ -75,6 +75,18 @@ void Interpreter::Impl::css_update(const AxisVec& at, std::uint32_t col) {
   emit_aux('S', rpm, false);
 }
 
+// M19 R Q P: orient the spindle to R degrees (P 0 clockwise, 1 counter-clockwise, 2 the
+// shorter way; Q the time allowed). The spindle stops there; the simulated spindle has no
+// angle, so the orientation itself is instantaneous.
+void Interpreter::Impl::orient_words() const {
+  const Words& w = words_;
+  if (w.has('p')) {
+    const double p = w['p'].value;
+    if (p != 0 && p != 1 && p != 2) fail(w['p'].col, "M19 P must be 0, 1 or 2 (the direction)");
+  }
+  if (w.has('q') && w['q'].value <= 0) fail(w['q'].col, "M19 Q (the time allowed) must be > 0");
+}
+
 // G1 in G96: the line is cut into pieces over which the speed changes by at most kCssStep,
 // each run at the speed of its middle (its feed too, in G95). Below the radius where D caps
 // the speed it is constant, and that stretch stays one piece.

@@ -43,6 +43,27 @@ TEST(Threading, G33FollowsTheSpindleAndStartsFromRest) {
   EXPECT_EQ(waits, 1U) << "one index wait before the series, none between its moves";
 }
 
+// M19 orients the spindle and stops it there: an event the motion waits for, after which a
+// synchronised move needs M3 or M4 again.
+TEST(Threading, M19OrientsAndStopsTheSpindle) {
+  const auto b = blocks("G18 G21 G90 S400 M3\nG0 X10 Z5\nM19 R90 P2 Q5\nG0 X12\n");
+  std::vector<double> m;
+  bool waits = false;
+  for (const Block& x : b) {
+    if (x.kind != BlockKind::kAux || x.aux_letter != 'M') continue;
+    m.push_back(x.aux_value);
+    if (x.aux_value == 19) waits = x.aux_waits;
+  }
+  EXPECT_EQ(m, (std::vector<double>{3, 19}));
+  EXPECT_TRUE(waits);
+  EXPECT_NE(error_of("G18 G21 S400 M3\nM19\nG33 Z-10 K1\n").find("needs the spindle turning"),
+            std::string::npos);
+  EXPECT_NE(error_of("M19 P3\n").find("thread.ngc:1:5: error: M19 P must be 0, 1 or 2"),
+            std::string::npos);
+  EXPECT_NE(error_of("M19 R10 Q0\n").find("M19 Q (the time allowed) must be > 0"),
+            std::string::npos);
+}
+
 // As rs274 lists them: the pitch before the synchronised moves, no DWELL for the index wait.
 TEST(Threading, CanonicalListingHasTheSyncCallsAndNoIndexWait) {
   Interpreter in(Interpreter::FromText{}, "G18 G21 G90 S400 M3\nG0 X10 Z5\nG33 Z-40 K1.5\nG0 X20\n",
