@@ -12,22 +12,11 @@ namespace cncore::interp::test {
 namespace {
 
 std::vector<Block> moves(const std::string& text) {
-  Interpreter in(Interpreter::FromText{}, text, "feed.ngc", test_machine(), Options{});
-  std::vector<Block> out;
-  Block b;
-  while (in.next(b)) {
-    if (is_motion(b)) out.push_back(b);
-  }
-  return out;
+  return motion_blocks(text, "feed.ngc");
 }
 
 std::string error_of(const std::string& text) {
-  try {
-    moves(text);
-  } catch (const InputError& e) {
-    return e.formatted();
-  }
-  return {};
+  return error_of_text(text, "feed.ngc");
 }
 
 double length_mm(const Block& b) {

@@ -18,22 +18,11 @@ namespace {
 const PlaneWords kZX = plane_words(18);  // a = Z, b = X
 
 std::vector<Block> blocks(const std::string& text) {
-  Interpreter in(Interpreter::FromText{}, text, "lathe.ngc", test_machine(), Options{});
-  std::vector<Block> out;
-  Block b;
-  while (in.next(b)) {
-    if (is_motion(b)) out.push_back(b);
-  }
-  return out;
+  return motion_blocks(text, "lathe.ngc");
 }
 
 std::string error_of(const std::string& text) {
-  try {
-    blocks(text);
-  } catch (const InputError& e) {
-    return e.formatted();
-  }
-  return {};
+  return error_of_text(text, "lathe.ngc");
 }
 
 bool rapid(const Block& b) {

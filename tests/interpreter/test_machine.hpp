@@ -31,6 +31,28 @@ inline MachineConfig test_machine() {
   return m;
 }
 
+// The motion blocks (rapid, line, arc) of a program given as text, named `name` in errors.
+inline std::vector<Block> motion_blocks(const std::string& text, const std::string& name,
+                                        const MachineConfig& m = test_machine()) {
+  Interpreter in(Interpreter::FromText{}, text, name, m, Options{});
+  std::vector<Block> out;
+  Block b;
+  while (in.next(b)) {
+    if (is_motion(b)) out.push_back(b);
+  }
+  return out;
+}
+
+// The formatted error (FILE:LINE:COL: error: …) of a program given as text; empty if it runs.
+inline std::string error_of_text(const std::string& text, const std::string& name) {
+  try {
+    motion_blocks(text, name);
+  } catch (const InputError& e) {
+    return e.formatted();
+  }
+  return {};
+}
+
 inline std::string read_text(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream ss;

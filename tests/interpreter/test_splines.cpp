@@ -19,22 +19,11 @@ constexpr double kTol = 0.01;  // the test machine's contour tolerance (the fit'
 constexpr double kPi = std::numbers::pi;
 
 std::vector<Block> moves(const std::string& text, const MachineConfig& m = test_machine()) {
-  Interpreter in(Interpreter::FromText{}, text, "s.ngc", m, Options{});
-  std::vector<Block> out;
-  Block b;
-  while (in.next(b)) {
-    if (is_motion(b)) out.push_back(b);
-  }
-  return out;
+  return motion_blocks(text, "s.ngc", m);
 }
 
 std::string error_of(const std::string& text) {
-  try {
-    moves(text);
-  } catch (const InputError& e) {
-    return e.formatted();
-  }
-  return {};
+  return error_of_text(text, "s.ngc");
 }
 
 Vec3 unit(Vec3 v) {

@@ -20,12 +20,7 @@ std::vector<Block> blocks(const std::string& text) {
 }
 
 std::string error_of(const std::string& text) {
-  try {
-    blocks(text);
-  } catch (const InputError& e) {
-    return e.formatted();
-  }
-  return {};
+  return error_of_text(text, "thread.ngc");
 }
 
 TEST(Threading, G33FollowsTheSpindleAndStartsFromRest) {
