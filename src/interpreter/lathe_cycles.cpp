@@ -87,14 +87,10 @@ void Interpreter::Impl::lathe_arc(bool ccw, Pt centre, Pt end, std::uint32_t col
   const Pt at = program_zx();
   if (std::fabs(at.real() - end.real()) < 1e-4 && std::fabs(at.imag() - end.imag()) < 1e-4) return;
   const PlaneAxes pa = plane_axes(modal_.plane);
-  const double turn = arc_turn_deg();
-  const AxisVec target = lathe_target(end);
-  const AxisVec from = turned(pos_, -turn), to = turned(target, -turn);
-  const AxisVec mc = turned(lathe_target(centre), -turn);
-  const Vec2 c{mc[pa.first], mc[pa.second]};
-  const double r0 = std::hypot(from[pa.first] - c.a, from[pa.second] - c.b);
-  const double r1 = std::hypot(to[pa.first] - c.a, to[pa.second] - c.b);
-  arc_move(target, c, r1 - r0, ccw, 0, col);
+  const AxisVec mc = turned(lathe_target(centre), -arc_turn_deg());
+  // r1 − r0 (a spiral's growth) in program coordinates: the frame's turn keeps distances.
+  const double dr_mm = (std::abs(end - centre) - std::abs(at - centre)) * modal_.length_unit_mm();
+  arc_move(lathe_target(end), {mc[pa.first], mc[pa.second]}, dr_mm, ccw, 0, col);
 }
 
 // One line of the profile's subroutine (instead of executing it).
@@ -153,11 +149,12 @@ Pt Interpreter::Impl::profile_centre(Pt from, Pt end) const {
   const bool ccw = cap.motion == 30;
   if (w.has('r')) {
     if (w.has('i') || w.has('k')) fail(w['r'].col, "arc with both R and I/K");
-    const double r = w['r'].value;
-    const double chord2 = std::norm(end - from);
-    if (chord2 / 4 > r * r) fail(w['r'].col, "arc radius R is smaller than half the chord");
-    const Pt d = Pt{0, 1} * std::sqrt((r * r - chord2 / 4) / chord2) * (end - from);
-    return (from + end) / 2.0 + (ccw ? d : -d);
+    // The shorter arc whatever R's sign (LinuxCNC's profiles), and no tolerance on the chord.
+    Vec2 c;
+    const ArcCheck chk = centre_from_radius({from.real(), from.imag()}, {end.real(), end.imag()},
+                                            std::fabs(w['r'].value), ccw, 0, c);
+    if (!chk.ok) fail(w['r'].col, chk.message);
+    return {c.a, c.b};
   }
   if (!w.has('i') && !w.has('k')) fail(w.first_col, "profile arc without I/K or R");
   Pt c{w['k'].value, w['i'].value};

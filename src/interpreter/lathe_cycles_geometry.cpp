@@ -14,6 +14,7 @@ constexpr Pt kI{0, 1};
 // Bounds on the work of one cycle, so that no profile can make it run forever.
 constexpr int kMaxOffsetSteps = 100000;
 constexpr long kMaxPocketSteps = 10000000;
+constexpr int kMaxPockets = 10000;
 
 // How the normalised profile was obtained from the programmed one: bit 0 z mirrored, bit 1 x
 // mirrored, bit 2 turned by −90° (G72, or a G70 profile along X). Moves are mapped back.
@@ -156,6 +157,7 @@ class Roughing {
   void spend() {
     if (++steps_ > kMaxPocketSteps) throw ProfileError{"the roughing makes no progress"};
   }
+  int pockets_ = 0;  // pocket() calls so far: bounds its recursion
   Profile& segs_;
   MoveSink& out_;
   double delta_;
@@ -227,7 +229,7 @@ void Roughing::pocket(int variant, Pt at, std::size_t p) {
           if (at.imag() > starts.back().imag() && starts.size() > 1) starts.pop_back();
           if (starts.size() == 1) starts.push_back(at);
         }
-        if (starts.size() > 10000) throw ProfileError{"too many pockets"};
+        if (++pockets_ > kMaxPockets) throw ProfileError{"too many pockets"};
         pocket(variant, at, p);
         return;
       }
@@ -242,16 +244,30 @@ void Roughing::pocket(int variant, Pt at, std::size_t p) {
       throw ProfileError{"the roughing pass at this height meets no profile"};
   }
 }
+
+// The profile from `start`, turned if asked, mirrored to run towards −Z and −X, its corners
+// finished; it must then be monotonic.
+Shape prepared(Profile profile, Pt start, bool turn) {
+  Shape shape{std::move(profile)};
+  shape.segs.front().start = start;
+  if (turn) shape.turn();
+  shape.normalise();
+  shape.finish_corners();
+  shape.check_monotonic();
+  return shape;
+}
+
+// A profile that is not monotonic along Z is one along X (a face): G70 turns it.
+bool along_x(const Profile& profile) {
+  Shape probe{Profile(profile.begin() + 1, profile.end())};
+  probe.normalise();
+  return std::ranges::any_of(probe.segs, [](const Seg& s) { return !seg::monotonic(s); });
+}
 }  // namespace
 
 void rough(Profile profile, const RoughingParams& p, MoveSink& out) {
   if (profile.size() < 2) return;
-  Shape shape{std::move(profile)};
-  shape.segs.front().start = p.start;
-  if (p.facing) shape.turn();
-  shape.normalise();
-  shape.finish_corners();
-  shape.check_monotonic();
+  Shape shape = prepared(std::move(profile), p.start, p.facing);
   shape.add_distance(p.allowance);
   for (Seg& s : shape.segs) seg::shift(s, p.shift);
   Oriented oriented(out, shape.state);
@@ -268,19 +284,9 @@ void rough(Profile profile, const RoughingParams& p, MoveSink& out) {
 
 void finish(Profile profile, const FinishingParams& p, MoveSink& out) {
   if (profile.size() < 2) return;
-  Shape shape{std::move(profile)};
-  shape.segs.front().start = p.start;
-  {
-    // A profile that is not monotonic along Z is one along X (a face): turn it.
-    Shape probe{Profile(shape.segs.begin() + 1, shape.segs.end())};
-    probe.normalise();
-    if (std::ranges::any_of(probe.segs, [](const Seg& s) { return !seg::monotonic(s); })) {
-      shape.turn();
-    }
-  }
-  shape.normalise();
-  shape.finish_corners();
-  shape.check_monotonic();
+  profile.front().start = p.start;
+  const bool turn = along_x(profile);
+  const Shape shape = prepared(std::move(profile), p.start, turn);
   Oriented oriented(out, shape.state);
   for (int pass = p.passes; pass > 0; --pass) {
     const double distance =
