@@ -84,6 +84,8 @@ void Shape::finish_corners() {
     }
   }
   std::erase_if(segs, [](const Seg& s) { return seg::size(s) < 1e-3; });
+  // The approach and at least one segment of the part.
+  if (segs.size() < 2) throw ProfileError{"the profile has no segment longer than 0.001"};
 }
 
 // After one offset step: arcs round the outside corners that opened, short and reversed

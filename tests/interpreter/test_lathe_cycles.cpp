@@ -288,6 +288,10 @@ TEST(LatheCycles, Errors) {
                 .find("with cutter radius compensation on"),
             std::string::npos);
   EXPECT_NE(error_of("G18 G0 U1\n").find("U axis is not supported"), std::string::npos);
+  EXPECT_NE(
+      error_of("o10 sub\nG1 X5 Z0\nZ-0.0005\no10 endsub\nG18 G0 X12 Z2 F100\nG70 Q10 X12 Z2\n")
+          .find("lathe.ngc:6:1: error: G70: the profile has no segment longer than 0.001"),
+      std::string::npos);
 }
 
 }  // namespace
