@@ -17,8 +17,11 @@
 namespace cncore::testing {
 namespace {
 
+// ctest runs each test in its own process, in parallel: the file names carry the test's name.
 std::string write_temp(const std::string& name, const std::string& text) {
-  const std::string path = ::testing::TempDir() + name;
+  const std::string path = ::testing::TempDir() +
+                           ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
+                           name;
   std::ofstream(path) << text;
   return path;
 }
