@@ -67,18 +67,16 @@ void Interpreter::Impl::cycle_body(std::size_t drill_axis, double r_mm, double b
       spindle(5);
       spindle(right ? 4 : 3);
       dwell();
-      cycle_move(false, at(r_mm), col);
+      cycle_move(false, at(clear_mm), col);  // LinuxCNC feeds out to the clearance, R or G98's
       spindle(5);
       spindle(right ? 3 : 4);
-      if (clear_mm != r_mm) cycle_move(true, at(clear_mm), col);
       return;
     }
-    case 850:  // boring, feed out
+    case 850:  // boring, feed out (to the clearance height, as LinuxCNC)
     case 890:  // boring, dwell, feed out
       cycle_move(false, at(bottom_mm), col);
       if (code == 890) dwell();
-      cycle_move(false, at(r_mm), col);
-      if (clear_mm != r_mm) cycle_move(true, at(clear_mm), col);
+      cycle_move(false, at(clear_mm), col);
       return;
     case 860:  // boring, spindle stop, rapid out
     case 880:  // boring, spindle stop, manual out (program stop)

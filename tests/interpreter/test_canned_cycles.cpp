@@ -58,9 +58,10 @@ TEST(CannedCycles, G73BacksOffALittleBetweenPecks) {
 
 TEST(CannedCycles, TappingReversesTheSpindleAtTheBottom) {
   const auto t = trace(blocks("G0 Z10\nG98 G84 Z-5 R2 P0.5 F100\nG74 Z-5 R2\n"), kZ);
-  const Trace want = {"R 1000",     "R 200", "F -500", "M 5",   "M 4",    "D 0.500000", "F 200",
-                      "M 5",        "M 3",   "R 1000", "R 200", "F -500", "M 5",        "M 3",
-                      "D 0.500000", "F 200", "M 5",    "M 4",   "R 1000"};
+  // In G98 the tap feeds out to the start height, as LinuxCNC's G84 does.
+  const Trace want = {"R 1000", "R 200",      "F -500", "M 5",   "M 4",    "D 0.500000",
+                      "F 1000", "M 5",        "M 3",    "R 200", "F -500", "M 5",
+                      "M 3",    "D 0.500000", "F 1000", "M 5",   "M 4"};
   EXPECT_EQ(t, want);
 }
 
@@ -68,7 +69,7 @@ TEST(CannedCycles, BoringCycles) {
   EXPECT_EQ(trace(blocks("G0 Z10\nG99 G85 Z-5 R2 F100\n"), kZ),
             (Trace{"R 1000", "R 200", "F -500", "F 200"}));
   EXPECT_EQ(trace(blocks("G0 Z10\nG98 G89 Z-5 R2 P1 F100\n"), kZ),
-            (Trace{"R 1000", "R 200", "F -500", "D 1.000000", "F 200", "R 1000"}));
+            (Trace{"R 1000", "R 200", "F -500", "D 1.000000", "F 1000"}));
   EXPECT_EQ(trace(blocks("G0 Z10\nG98 G86 Z-5 R2 F100\n"), kZ),
             (Trace{"R 1000", "R 200", "F -500", "M 5", "R 1000", "M 3"}));
   EXPECT_EQ(trace(blocks("G0 Z10\nG98 G88 Z-5 R2 F100\n"), kZ),
