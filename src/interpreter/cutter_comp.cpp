@@ -14,7 +14,7 @@ namespace {
 
 constexpr double kPlaneEps = 1e-9;  // mm: no motion in the plane
 // LinuxCNC's TOLERANCE_CONCAVE_CORNER: a corner turning less than this is tangent.
-constexpr double kTangentRad = 0.01;
+constexpr double kTangentRad = 0.05;
 // An arc cut back at an inside corner may not sweep further than programmed by more than this
 // (mm along the arc; LinuxCNC allows 0.001 in).
 constexpr double kSweepSlackMm = 0.0254;
@@ -29,22 +29,21 @@ bool line_line(Vec2 p, Vec2 u, Vec2 q, Vec2 v, Vec2& x) {
 
 // Line p + t·u (u unit) and circle |x − c| = r: with w = p − c,
 //   t² + 2(w·u)t + (w·w − r²) = 0,  t = −w·u ± √((w·u)² − w·w + r²);
-// of the two points, the one nearer `near`.
-bool line_circle(Vec2 p, Vec2 u, Vec2 c, double r, Vec2 near, Vec2& x) {
+// the point where the line enters the circle (smaller t) or where it leaves it.
+bool line_circle(Vec2 p, Vec2 u, Vec2 c, double r, bool entering, Vec2& x) {
   const Vec2 w = p - c;
   const double b = dot(w, u);
   const double disc = b * b - dot(w, w) + r * r;
   if (disc < 0) return false;
   const double root = std::sqrt(disc);
-  const Vec2 x1 = p + (-b + root) * u;
-  const Vec2 x2 = p + (-b - root) * u;
-  x = norm(x1 - near) <= norm(x2 - near) ? x1 : x2;
+  x = p + (-b + (entering ? -root : root)) * u;
   return true;
 }
 
 // Circles |x − c1| = r1 and |x − c2| = r2, d = |c2 − c1|: along the line of centres at
-//   a = (r1² − r2² + d²) / (2d) from c1, ± h = √(r1² − a²) across it; the point nearer `near`.
-bool circle_circle(Vec2 c1, double r1, Vec2 c2, double r2, Vec2 near, Vec2& x) {
+//   a = (r1² − r2² + d²) / (2d) from c1, ± h = √(r1² − a²) across it; the point to the left
+//   of c1 → c2 (+h) or to its right.
+bool circle_circle(Vec2 c1, double r1, Vec2 c2, double r2, bool left, Vec2& x) {
   const double d = norm(c2 - c1);
   if (d < kPlaneEps || d > r1 + r2 || d < std::fabs(r1 - r2)) return false;
   const Vec2 u = (1 / d) * (c2 - c1);
@@ -52,9 +51,7 @@ bool circle_circle(Vec2 c1, double r1, Vec2 c2, double r2, Vec2 near, Vec2& x) {
   const double h = std::sqrt(std::max(0.0, r1 * r1 - a * a));
   const Vec2 m = c1 + a * u;
   const Vec2 n{-u.b, u.a};
-  const Vec2 x1 = m + h * n;
-  const Vec2 x2 = m - h * n;
-  x = norm(x1 - near) <= norm(x2 - near) ? x1 : x2;
+  x = m + (left ? h : -h) * n;
   return true;
 }
 
@@ -238,8 +235,10 @@ void CutterComp::corner(Move& next, std::vector<Block>& out) {
   bool outside = turn < -kTangentRad;
   if (std::fabs(turn) > std::numbers::pi - kTangentRad) {
     // The path reverses: the tool goes round the end, except next to an arc it is outside
-    // of, where it stays on its side of the arc (LinuxCNC's "h" shape).
-    inside = (move_.arc && move_.ccw != (sign_ > 0)) || (next.arc && next.ccw != (sign_ > 0));
+    // of, where it stays on its side of the arc (LinuxCNC's "h" shape). As in LinuxCNC, the
+    // next move decides when it is an arc, else the held one.
+    const Move& arc = next.arc ? next : move_;
+    inside = arc.arc && arc.ccw != (sign_ > 0);
     outside = !inside;
   }
   if (inside) {
@@ -261,23 +260,29 @@ void CutterComp::corner(Move& next, std::vector<Block>& out) {
 }
 
 Vec2 CutterComp::inside_corner(const Move& prev, const Move& next) const {
-  const Vec2 p = prev.pe;
   Vec2 q;
   if (!prev.arc && !next.arc) {
     if (!line_line(prev.e, prev.dir, next.s, next.dir, q)) {
       fail("Zero degree inside corner is invalid for cutter compensation");
     }
   } else if (!prev.arc) {
-    if (!line_circle(prev.e, prev.dir, next.c, norm(next.s - next.c), p, q)) {
+    // The line stops where it enters the arc's offset circle, or, with the tool inside the
+    // arc, where it leaves it (LinuxCNC's choice, also when the path nearly reverses).
+    const bool outside = next.ccw != (sign_ > 0);
+    if (!line_circle(prev.e, prev.dir, next.c, norm(next.e - next.c), outside, q)) {
       fail("Arc move in concave corner cannot be reached by the tool without gouging");
     }
   } else if (!next.arc) {
-    if (!line_circle(next.s, next.dir, prev.c, norm(prev.e - prev.c), p, q)) {
+    // The same corner run backwards.
+    const bool outside = prev.ccw != (sign_ > 0);
+    if (!line_circle(next.s, next.dir, prev.c, norm(prev.e - prev.c), !outside, q)) {
       fail(
           "Arc to straight motion makes a corner the compensated tool can't fit in without "
           "gouging");
     }
-  } else if (!circle_circle(prev.c, norm(prev.e - prev.c), next.c, norm(next.s - next.c), p, q)) {
+  } else if (!circle_circle(prev.c, norm(prev.e - prev.c), next.c, norm(next.e - next.c),
+                            // LinuxCNC's side of the line of centres
+                            (prev.ccw == (sign_ > 0)) == next.ccw, q)) {
     fail("Arc to arc motion makes a corner the compensated tool can't fit in without gouging");
   }
   return q;

@@ -311,6 +311,27 @@ TEST(CutterComp, ReversalsGoRoundTheEnd) {
   EXPECT_EQ(m.corner_arcs, 2u);
 }
 
+// A line that turns back 178° into a G2 half circle (LinuxCNC's crazy-paths case). With the
+// tool outside the arc (G41) the corner is inside: the line stops where it meets the arc's
+// offset and every sample stays one radius from the contour. With the tool inside the arc
+// (G42) LinuxCNC's 0.05 rad tolerance makes it a reversal: the tool goes round the corner on an
+// arc, and where that arc meets the half circle's offset it comes a little nearer the contour.
+TEST(CutterComp, NearReversalIntoAnArcFollowsLinuxCnc) {
+  const std::vector<Piece> contour = {line({116.7, -94.2}, {0, 0}),
+                                      arc({0, 0}, {-36, -48}, false, {-18, -24})};
+  for (const bool left : {true, false}) {
+    SCOPED_TRACE(left ? "G41.1" : "G42.1");
+    const Traced r = run_contour(contour, 17, left, left ? "G41.1 D5" : "G42.1 D5");
+    const Measured m = measure(r, contour, 17, left, 2.5);
+    EXPECT_GT(m.samples, 100u);
+    EXPECT_EQ(m.corner_arcs, left ? 0u : 1u);
+    EXPECT_LT(m.worst_radius_error, left ? 1e-6 : 0.01 * 2.5);
+    if (left) {
+      EXPECT_EQ(m.wrong_side, 0u);
+    }
+  }
+}
+
 // LinuxCNC's own bad/ccomp-arcexit.ngc (CNCORE_SHARED_DIR) fails with the message its first
 // line names: an arc right after G40.
 TEST(CutterComp, LinuxCncArcExitFailsForItsReason) {
