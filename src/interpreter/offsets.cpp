@@ -126,7 +126,7 @@ void Interpreter::Impl::go_home(int code10) {
   for (std::size_t a = 0; a < kMaxAxes; ++a) any = any || words_[kAxisWords[a]].present;
   const Motion saved = modal_.motion;
   modal_.motion = Motion::kRapid;
-  if (any) line_motion(target_from_words(false), col);
+  line_motion(target_from_words(false), col);  // without words, where it is (as LinuxCNC lists)
   AxisVec home = pos_;
   for (std::size_t a = 0; a < kMaxAxes; ++a) {
     if (!machine_.axes[a].enabled) continue;
