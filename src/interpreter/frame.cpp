@@ -85,7 +85,7 @@ AxisVec Interpreter::Impl::target_from_words(bool machine_coords) const {
   for (std::size_t a = 0; a < kMaxAxes; ++a) {
     if (!words_[kAxisWords[a]].present) continue;
     if (machine_coords) {
-      target[a] = value(a) + tool_offset_[a];  // G53: machine coordinates; the tool offset stays
+      target[a] = value(a);  // G53: the machine position itself, whatever tool offset is active
     } else if (modal_.absolute) {
       target[a] = value(a) + offset(a);  // G90: program coordinate + work offset (+ G92)
     } else {
@@ -96,7 +96,7 @@ AxisVec Interpreter::Impl::target_from_words(bool machine_coords) const {
 }
 
 // #5420…#5425 and #<_x>…#<_c>: the position in program coordinates; #5021…#5026 and
-// #<_abs_x>…#<_abs_c>: in machine coordinates without the tool offset (program units).
+// #<_abs_x>…#<_abs_c>: the machine position, where G53 goes (program units).
 bool Interpreter::Impl::read_live(int number, double& value) const {
   auto unit = [&](std::size_t a) { return is_rotary(a) ? 1.0 : modal_.length_unit_mm(); };
   if (machine_.parameters_inch && offset_length_param(number)) {
@@ -111,7 +111,7 @@ bool Interpreter::Impl::read_live(int number, double& value) const {
   if (number >= kParamMachinePosition &&
       number < kParamMachinePosition + static_cast<int>(kMaxAxes)) {
     const auto axis = static_cast<std::size_t>(number - kParamMachinePosition);
-    value = (pos_[axis] - tool_offset_[axis]) / unit(axis);
+    value = pos_[axis] / unit(axis);
     return true;
   }
   return read_tool_param(number, value);
