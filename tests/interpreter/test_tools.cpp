@@ -100,10 +100,11 @@ TEST(ToolLength, DynamicAndAddedOffsetsInInch) {
 // G53 names the machine position (LinuxCNC backs the tool offset out): the spindle goes there.
 TEST(ToolLength, G53GoesToTheMachinePositionWhateverTheToolOffset) {
   const Options o = with_table("T1 Z10\n");
-  const auto b = motion_with("G10 L2 P1 Z-50\nT1 M6 G43\nG53 G0 Z0\nG0 Z0\n", o);
-  ASSERT_EQ(b.size(), 2u);
-  EXPECT_DOUBLE_EQ(b[0].end[kZ], 0.0);
-  EXPECT_DOUBLE_EQ(b[1].end[kZ], -40.0);
+  const auto b = motion_with("G10 L2 P1 Z-50\nT1 M6 G43\nG0 Z-20\nG53 G0 Z0\nG0 Z0\n", o);
+  ASSERT_EQ(b.size(), 3u);
+  EXPECT_DOUBLE_EQ(b[0].end[kZ], -60.0);  // -20 - 50 + 10
+  EXPECT_DOUBLE_EQ(b[1].end[kZ], 0.0);
+  EXPECT_DOUBLE_EQ(b[2].end[kZ], -40.0);
 }
 
 TEST(ToolTableWrites, G10L1L10L11) {
