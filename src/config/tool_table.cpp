@@ -7,6 +7,9 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string_view>
+#include <utility>
+#include <vector>
 
 #include "core/error.hpp"
 
@@ -101,19 +104,76 @@ bool parse_line(const LineParser& p, ToolEntry& t) {
   return any;
 }
 
+// The words of a line split at blanks, with the column where each starts.
+std::vector<std::pair<std::size_t, std::string_view>> words_of(std::string_view s) {
+  std::vector<std::pair<std::size_t, std::string_view>> out;
+  for (std::size_t i = 0; i < s.size();) {
+    if (blank(s[i])) {
+      ++i;
+      continue;
+    }
+    std::size_t end = i;
+    while (end < s.size() && !blank(s[end])) ++end;
+    out.emplace_back(i, s.substr(i, end - i));
+    i = end;
+  }
+  return out;
+}
+
+// LinuxCNC's older column format: a header "POC FMS LEN DIAM COMMENT" (mill) or "POC FMS
+// ZOFFSET XOFFSET DIA FRONTANGLE BACKANGLE ORIENT COMMENT" (lathe), then one row per tool; FMS
+// is the tool number. The columns are read by the header's names.
+bool parse_legacy_line(const LineParser& p, const std::vector<std::string>& columns, ToolEntry& t) {
+  const auto words = words_of(p.text);
+  if (words.empty() || words.front().second.front() == ';') return false;
+  bool have_tool = false;
+  for (std::size_t k = 0; k < words.size() && k < columns.size(); ++k) {
+    const std::string& name = columns[k];
+    if (name == "COMMENT") break;
+    const std::size_t at = words[k].first;
+    const std::string_view text = words[k].second;
+    double v = 0;
+    const auto r = fast_float::from_chars(text.data(), text.data() + text.size(), v);
+    if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !std::isfinite(v)) {
+      p.fail(at, fmt::format("tool table: '{}' is not a number (column {})", text, name));
+    }
+    auto count = [&] {
+      if (v < 0 || v != std::floor(v) || v > 1e9) {
+        p.fail(at, fmt::format("tool table: {} must be a non-negative integer", name));
+      }
+      return static_cast<std::uint32_t>(v);
+    };
+    if (name == "POC") t.pocket = count();
+    if (name == "FMS") {
+      t.number = count();
+      have_tool = true;
+    }
+    if (name == "LEN" || name == "ZOFFSET") t.offset_mm[2] = v;
+    if (name == "XOFFSET") t.offset_mm[0] = v;
+    if (name == "DIAM" || name == "DIA") t.diameter_mm = std::fabs(v);
+  }
+  if (!have_tool) p.fail(0, "tool table: a row without its FMS (tool number) column");
+  return true;
+}
+
 }  // namespace
 
 ToolTable parse_tool_table(const std::string& text, const std::string& source_name) {
   ToolTable table;
   std::uint32_t line = 0;
   std::size_t pos = 0;
+  std::vector<std::string> legacy_columns;  // set by a "POC FMS …" header
   while (pos <= text.size()) {
     const std::size_t nl = text.find('\n', pos);
     const std::size_t end = nl == std::string::npos ? text.size() : nl;
     ++line;
     const LineParser p{source_name, line, std::string_view(text).substr(pos, end - pos)};
     ToolEntry t;
-    if (parse_line(p, t)) {
+    const auto words = words_of(p.text);
+    if (table.empty() && legacy_columns.empty() && !words.empty() && words[0].second == "POC") {
+      for (const auto& w : words) legacy_columns.emplace_back(w.second);
+    } else if (legacy_columns.empty() ? parse_line(p, t)
+                                      : parse_legacy_line(p, legacy_columns, t)) {
       if (!table.try_emplace(t.number, t).second) {
         p.fail(0, fmt::format("tool table: tool {} is listed twice", t.number));
       }

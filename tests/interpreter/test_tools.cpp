@@ -47,6 +47,33 @@ TEST(ToolTable, LinuxCncFormatWithCommentsAndAnyOrder) {
   EXPECT_DOUBLE_EQ(t.at(7).offset_mm[kZ], -3.0);
 }
 
+// LinuxCNC's older column format, mill and lathe headers: FMS is the tool number.
+TEST(ToolTable, OlderColumnFormat) {
+  const ToolTable mill = parse_tool_table(
+      "POC     FMS     LEN     DIAM    COMMENT\n\n1 1 0.5 0.0625 first tool\n32 7 -2 4\n", "t.tbl");
+  ASSERT_EQ(mill.size(), 2u);
+  EXPECT_EQ(mill.at(1).pocket, 1u);
+  EXPECT_DOUBLE_EQ(mill.at(1).offset_mm[kZ], 0.5);
+  EXPECT_DOUBLE_EQ(mill.at(1).diameter_mm, 0.0625);
+  EXPECT_EQ(mill.at(7).pocket, 32u);
+  EXPECT_DOUBLE_EQ(mill.at(7).offset_mm[kZ], -2.0);
+  const ToolTable lathe = parse_tool_table(
+      "POC FMS ZOFFSET XOFFSET DIA FRONTANGLE BACKANGLE ORIENT COMMENT\n2 3 1.5 -0.25 0.8 95 "
+      "155 2 turning\n",
+      "t.tbl");
+  EXPECT_DOUBLE_EQ(lathe.at(3).offset_mm[kZ], 1.5);
+  EXPECT_DOUBLE_EQ(lathe.at(3).offset_mm[kX], -0.25);
+  EXPECT_DOUBLE_EQ(lathe.at(3).diameter_mm, 0.8);
+  try {
+    parse_tool_table("POC FMS LEN DIAM\n1 1 x 2\n", "t.tbl");
+    ADD_FAILURE() << "a word that is not a number is accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.formatted().find("t.tbl:2:5: error: tool table: 'x' is not a number (column LEN)"),
+              std::string::npos)
+        << e.formatted();
+  }
+}
+
 TEST(ToolTable, ErrorsNameLineAndColumn) {
   auto err = [](const std::string& text) {
     try {
