@@ -123,9 +123,9 @@ void Interpreter::Impl::capture_profile_block() {
   }
   if (cap.incremental) end += cap.at;
   if (end == cap.at) return;
-  if (cap.motion < 0) fail(w.first_col, "profile line before any G0, G1, G2 or G3");
+  // A line before any G0–G3 in the profile is a straight segment (LinuxCNC reads it so).
   const Pt from = cap.at;
-  if (cap.motion == 0 || cap.motion == 10) {
+  if (cap.motion <= 10) {
     cap.profile.push_back(lathe::line_seg(from, end));
   } else {
     cap.profile.push_back(lathe::arc_seg(cap.motion == 30, from, profile_centre(from, end), end));

@@ -206,6 +206,21 @@ TEST(LatheCycles, G70FinishesOnTheProfileAndAtItsOffsets) {
   EXPECT_GE(on_profile, kShaft.size());
 }
 
+// A profile line before any G0–G3 is a straight segment, as LinuxCNC reads it: the same
+// profile with and without its first G1 gives the same cycle.
+TEST(LatheCycles, AProfileLineWithoutAMotionCodeIsStraight) {
+  const std::string tail = "G18 G21 G90 G8 F200\nG0 X15 Z5\nG71 Q10 X12 Z2 D0.2 I1 R0.5\n";
+  std::string bare = kShaftSub;
+  bare.replace(bare.find("G1 X5"), 2, "");
+  const auto with = blocks(std::string(kShaftSub) + tail);
+  const auto without = blocks(bare + tail);
+  ASSERT_EQ(with.size(), without.size());
+  ASSERT_GT(with.size(), 10u);
+  for (std::size_t i = 0; i < with.size(); ++i) {
+    for (std::size_t a = 0; a < 3; ++a) EXPECT_NEAR(with[i].end[a], without[i].end[a], 1e-12);
+  }
+}
+
 // A face stepped from Z-6 at the centre to Z-3 at radius 10, roughed by passes along X.
 TEST(LatheCycles, G72FacesInPassesAlongX) {
   const std::vector<Piece> face = {
