@@ -323,9 +323,11 @@ void Interpreter::Impl::execute_oword(const OWord& o) {
   }
 }
 
-// endsub / return: back to the caller, with an optional [value] in #<_value>.
+// endsub / return: back to the caller, with an optional [value] in #<_value> (0 without one).
+// LinuxCNC takes a `return` under any label inside a subroutine (o110 return in o110 if).
 void Interpreter::Impl::return_from_sub(const OWord& o) {
-  if (frames_.empty() || frames_.back().fanuc || frames_.back().label != o.label) {
+  const bool any_label = o.keyword == OKeyword::kReturn;
+  if (frames_.empty() || frames_.back().fanuc || (!any_label && frames_.back().label != o.label)) {
     fail(o.col, fmt::format("{} {} outside a call of {}", display(o.label), keyword_text(o.keyword),
                             display(o.label)));
   }
@@ -336,6 +338,7 @@ void Interpreter::Impl::return_from_sub(const OWord& o) {
     params_.set_named("_value", v);
     params_.set_named("_value_returned", 1);
   } else {
+    params_.set_named("_value", 0);
     params_.set_named("_value_returned", 0);
   }
   const Frame f = frames_.back();

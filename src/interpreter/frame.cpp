@@ -132,6 +132,7 @@ bool Interpreter::Impl::read_live_named(std::string_view name, double& value) co
     value = modal_.diameter_mode == (name == "_lathe_diameter_mode") ? 1 : 0;
     return true;
   }
+  if (read_modal_named(name, value)) return true;
   const bool abs = name.starts_with("_abs_");
   const std::string_view axis = name.substr(abs ? 5 : 1);
   if (!name.starts_with('_') || axis.size() != 1) return false;

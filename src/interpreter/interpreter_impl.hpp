@@ -234,6 +234,7 @@ struct Interpreter::Impl final : LiveParameters {
   AxisVec to_program(const AxisVec& m, const AxisVec& tool) const;
   AxisVec from_program(const AxisVec& p) const;
   bool read_live_named(std::string_view name, double& value) const override;
+  bool read_modal_named(std::string_view name, double& value) const;  // named_parameters.cpp
   CanonFrame canon_frame() const;
   Block base_block(BlockKind kind) const;
   void emit_aux(char letter, double value, bool waits);
@@ -356,6 +357,7 @@ struct Interpreter::Impl final : LiveParameters {
                                    // used without a table: zero offsets
   bool tool_table_given_ = false;  // a table was configured: T of an unlisted tool is an error
   std::uint32_t selected_tool_ = 0;  // T: the tool the next M6 loads
+  int comp_code_ = 400;              // G40, G41, G41.1, G42, G42.1 as 400 … 421
   AxisVec tool_offset_{};            // the active tool length offset (G43…), mm / deg
   // Cutter radius compensation: the stage the blocks of each line pass through (from
   // out_[comp_from_]; the blocks before were made under the mode before this line's G40/G41).

@@ -189,8 +189,13 @@ void Interpreter::Impl::cutter_comp(double unit) {
   refuse_with_comp();
   const Words::Code* g = w.group(GGroup::kCutterComp);
   if (g == nullptr) {
-    if (w.has('d') && w.group(GGroup::kSpindleMode) == nullptr && !lathe_cycle_block()) {
-      fail(w['d'].col, "D word without G41, G42, G41.1, G42.1 or G96");
+    // D is also G33's and G76's start angle of the thread (degrees; LinuxCNC): the simulated
+    // spindle has no angle, so it does not change the motion.
+    const Words::Code* m = w.group(GGroup::kMotion);
+    const bool thread = (m != nullptr && (m->code10 == 330 || m->code10 == 760)) ||
+                        (m == nullptr && modal_.motion == Motion::kSpindleSync);
+    if (w.has('d') && w.group(GGroup::kSpindleMode) == nullptr && !lathe_cycle_block() && !thread) {
+      fail(w['d'].col, "D word without G41, G42, G41.1, G42.1, G96, G33 or G76");
     }
     return;
   }
@@ -198,6 +203,7 @@ void Interpreter::Impl::cutter_comp(double unit) {
   if (g->code10 == 400) {
     if (w.has('d')) fail(w['d'].col, "D word with G40");
     comp_.stop(out_, ctx_.line, g->col);
+    comp_code_ = 400;
     comp_from_ = out_.size();
     return;
   }
@@ -216,6 +222,7 @@ void Interpreter::Impl::cutter_comp(double unit) {
   if (diameter_mm < 0) left = !left;
   comp_.start(left ? CutterComp::Side::kLeft : CutterComp::Side::kRight, std::fabs(diameter_mm) / 2,
               modal_.plane);
+  comp_code_ = g->code10;
   comp_from_ = out_.size();
 }
 

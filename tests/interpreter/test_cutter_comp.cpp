@@ -249,7 +249,8 @@ TEST(CutterComp, GougingIsAnErrorAtItsLine) {
        "comp.ngc:4:1: error: the first move with cutter radius compensation must be a straight "
        "line"},
       {"G21 F100\nG0 X-10\nG41.1\n", "comp.ngc:3:1: error: G41.1 without D"},
-      {"G21 F100\nG1 X1 D3\n", "comp.ngc:2:7: error: D word without G41, G42, G41.1, G42.1 or G96"},
+      {"G21 F100\nG1 X1 D3\n",
+       "comp.ngc:2:7: error: D word without G41, G42, G41.1, G42.1, G96, G33 or G76"},
   };
   for (const Case& c : cases) {
     EXPECT_NE(error_of(c.program).find(c.error), std::string::npos)

@@ -111,6 +111,20 @@ TEST(Threading, G76PassesCutTheDegressionDepthsThenTheSpringPasses) {
   EXPECT_DOUBLE_EQ(b.back().end[2], -30);
 }
 
+// D on G33 and G76 is the thread's start angle (LinuxCNC): accepted, and with a spindle that
+// has no angle it leaves the motion as it is.
+TEST(Threading, StartAngleDLeavesTheMotion) {
+  for (const std::string code : {"G33 Z-40 K1.5", "G76 P2 Z-30 I-1 J0.1 K1.2 R2 H2"}) {
+    const std::string head = "G18 G21 G90 S500 M3\nG0 X20 Z5\n";
+    const auto plain = blocks(head + code + "\n");
+    const auto angled = blocks(head + code + " D-90\n");
+    ASSERT_EQ(plain.size(), angled.size()) << code;
+    for (std::size_t i = 0; i < plain.size(); ++i) {
+      for (std::size_t a = 0; a < 3; ++a) EXPECT_EQ(plain[i].end[a], angled[i].end[a]) << code;
+    }
+  }
+}
+
 TEST(Threading, ConstantSurfaceSpeedFollowsTheRadiusUpToD) {
   // 150 m/min: 150000 / (2π·r) rpm, capped at D2000 below r = 11.94 mm.
   const auto b = blocks("G18 G21 G90 G0 X40 Z0\nG96 S150 D2000 M3\nG95 G1 X0 F0.1\n");

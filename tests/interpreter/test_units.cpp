@@ -253,5 +253,45 @@ TEST(ParameterUnits, OffsetParametersAreInTheMachinesUnit) {
   }
 }
 
+std::vector<std::string> messages_of(const std::string& text) {
+  std::vector<std::string> said;
+  Options o;
+  o.on_message = [&](const std::string& t) { said.push_back(t); };
+  Interpreter in(Interpreter::FromText{}, text, "p.ngc", test_machine(), o);
+  Block b;
+  while (in.next(b)) {
+  }
+  return said;
+}
+
+// LinuxCNC's predefined named parameters read the modal state: G codes as ten times their
+// number, flags as 1 or 0, F and S in program units.
+TEST(Parameters, NamedModalStateFollowsLinuxCnc) {
+  const auto said = messages_of(
+      "G20 G91 G18 G55 G99 G95 F0.01 S500 M3 T2\nG1 Z-0.1\n"
+      "(debug,#<_line> #<_motion_mode> #<_plane> #<_coord_system> #<_imperial> #<_metric>)\n"
+      "(debug,#<_incremental> #<_retract_r_plane> #<_units_per_rev> #<_feed> #<_rpm>)\n"
+      "(debug,#<_spindle_on> #<_spindle_cw> #<_selected_tool> #<_current_tool> #<_ccomp>)\n"
+      "G21 G90 G17 G59.2 G80 G94 F100 M5\n"
+      "(debug,#<_motion_mode> #<_plane> #<_coord_system> #<_metric> #<_absolute> #<_feed>)\n"
+      "o1 sub\n(debug,#<_call_level>)\no1 endsub\no1 call\n(debug,#<_call_level>)\n");
+  EXPECT_EQ(said, (std::vector<std::string>{
+                      "3.000000 10.000000 180.000000 550.000000 1.000000 0.000000",
+                      "1.000000 1.000000 1.000000 0.010000 500.000000",
+                      "1.000000 1.000000 2.000000 0.000000 400.000000",
+                      "800.000000 170.000000 592.000000 1.000000 1.000000 100.000000", "1.000000",
+                      "0.000000"}));
+}
+
+// `return` may carry any O label inside a subroutine (LinuxCNC); a return without a value
+// leaves 0 in #<_value>.
+TEST(Parameters, ReturnValues) {
+  const auto said = messages_of(
+      "o1 sub\no2 if [#1 GT 0]\no2 return [#1 * 2]\no2 endif\no1 endsub\n"
+      "o1 call [4]\n(debug,#<_value> #<_value_returned>)\n"
+      "o1 call [-1]\n(debug,#<_value> #<_value_returned>)\n");
+  EXPECT_EQ(said, (std::vector<std::string>{"8.000000 1.000000", "0.000000 0.000000"}));
+}
+
 }  // namespace
 }  // namespace cncore::interp::test
