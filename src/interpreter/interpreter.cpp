@@ -417,8 +417,14 @@ void Interpreter::Impl::execute_motion(const Words::Code* nonmodal, bool axes_fo
           sync_mode && (c == 'k' || (c == 'i' && modal_.motion == Motion::kRigidTap));
       const bool back_bore_word = cycle_mode && modal_.cycle == 870 && c != 'r';
       const bool orient_word = c == 'r' && w.has_m(190);  // M19 R: the angle
+      const Words::Code* path = w.group(GGroup::kPathControl);
+      const bool planner_word = c == 'r' && path != nullptr && path->code10 == 640;
+      if (orient_word && planner_word && w.has('r')) {
+        fail(w['r'].col,
+             "R is ambiguous with G64 and M19 in one block: put them on separate lines");
+      }
       if (w.has(c) && !(c == 'r' && (nm == 100 || cycle_mode)) && !(spline_ij && c != 'r') &&
-          !sync_word && !back_bore_word && !orient_word) {
+          !sync_word && !back_bore_word && !orient_word && !planner_word) {
         fail(w[c].col, fmt::format("{} word without G2/G3", static_cast<char>(c - 'a' + 'A')));
       }
     }
@@ -567,7 +573,7 @@ void Interpreter::Impl::adaptive_feed_events() {
   }
 }
 
-// Step 20: G61 exact path, G61.1 exact stop, G64 [P tolerance] [Q smoothing tolerance].
+// Step 20: G61 exact path, G61.1 exact stop, G64 [P tolerance] [Q smoothing tolerance] [R].
 void Interpreter::Impl::set_path_control(const Words::Code& g, double unit) {
   const Words& w = words_;
   if (g.code10 == 610) {
@@ -588,6 +594,9 @@ void Interpreter::Impl::set_path_control(const Words::Code& g, double unit) {
       if (w['q'].value < 0) fail(w['q'].col, "negative G64 smoothing tolerance Q");
       modal_.smooth_tolerance_mm = w['q'].value * unit;
     }
+    // G64 R: another planner's peak-acceleration scale (LinuxCNC-derived controls); cncore's
+    // planner keeps its own limits, so the word is read and checked but changes nothing.
+    if (w.has('r') && w['r'].value < 0) fail(w['r'].col, "negative G64 R");
   }
 }
 
