@@ -25,6 +25,9 @@ enum class PathMode : std::uint8_t {
   kExactStop,  // G61.1 or G9 (one block): speed 0 at the end of the block
 };
 
+// The two moves of a G33.1 rigid tap (one RIGID_TAP call in LinuxCNC's canonical listing).
+enum class RigidTap : std::uint8_t { kNone, kIn, kOut };
+
 struct Block {
   BlockKind kind = BlockKind::kLine;
   std::uint32_t line = 0;  // source line, 1-based
@@ -61,6 +64,10 @@ struct Block {
   // does not act, as in LinuxCNC). 0: a move at its programmed feed. On a zero kDwell: the wait
   // for the spindle's index pulse before such moves.
   double sync_mm_rev = 0;
+  // G33 / G76 D: the spindle angle past its index (degrees, >= 0) at which the synchronised
+  // move starts; NaN: none programmed (the index itself).
+  double sync_start_deg = std::numeric_limits<double>::quiet_NaN();
+  RigidTap rigid_tap = RigidTap::kNone;
 
   // Arc / helix (kArc). The motion turns counter-clockwise about `normal` (right-hand rule):
   // G3 in G17 has normal +Z, G2 in G17 has -Z; G18 uses ±Y, G19 uses ±X.

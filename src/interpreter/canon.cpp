@@ -51,20 +51,32 @@ std::string CanonPrinter::print(const Block& b, const CanonFrame& f) {
     if (per_min != last_feed_) out += fmt::format("SET_FEED_RATE({})\n", num(per_min));
     last_feed_ = per_min;
   };
-  // LinuxCNC: START_SPEED_FEED_SYNC(pitch, velocity mode) before synchronised moves.
-  if (is_motion(b) && b.sync_mm_rev != last_sync_) {
+  // LinuxCNC: START_SPEED_FEED_SYNC(pitch, velocity mode[, start angle]) before synchronised
+  // moves; a new pitch or angle starts a new synchronisation.
+  const bool angle = !std::isnan(b.sync_start_deg);
+  const bool same_angle = angle ? b.sync_start_deg == last_sync_deg_ : std::isnan(last_sync_deg_);
+  if (is_motion(b) && (b.sync_mm_rev != last_sync_ || !same_angle)) {
     if (b.sync_mm_rev > 0) {
-      out += fmt::format("START_SPEED_FEED_SYNC({:.6f},0)\n", b.sync_mm_rev / f.unit_mm);
+      out += fmt::format("START_SPEED_FEED_SYNC({:.6f},0", b.sync_mm_rev / f.unit_mm);
+      out += angle ? fmt::format(",{:.6f})\n", b.sync_start_deg) : ")\n";
     } else {
       out += "STOP_SPEED_FEED_SYNCH()\n";
     }
     last_sync_ = b.sync_mm_rev;
+    last_sync_deg_ = b.sync_start_deg;
   }
   switch (b.kind) {
     case BlockKind::kRapid:
       out += fmt::format("STRAIGHT_TRAVERSE({})\n", axes(b.end));
       break;
     case BlockKind::kLine:
+      // G33.1 is one call: in to the depth, the spindle reversed, out again below the interface.
+      if (b.rigid_tap == RigidTap::kOut) break;
+      if (b.rigid_tap == RigidTap::kIn) {
+        out += fmt::format("RIGID_TAP({}, {}, {})\n", num(at(b.end, 0)), num(at(b.end, 1)),
+                           num(at(b.end, 2)));
+        break;
+      }
       if (b.sync_mm_rev <= 0) feed();
       out += fmt::format("STRAIGHT_FEED({})\n", axes(b.end));
       break;

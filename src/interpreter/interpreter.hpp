@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -106,6 +107,7 @@ class CanonPrinter {
  private:
   double last_feed_ = -1;
   double last_sync_ = 0;  // the pitch of the spindle synchronisation in force (0: none)
+  double last_sync_deg_ = std::numeric_limits<double>::quiet_NaN();  // its start angle
 };
 
 // One line of `cncore check --blocks` for a block (stable text format used by golden tests,

@@ -275,6 +275,11 @@ struct Interpreter::Impl final : LiveParameters {
   void threading_pass(const ThreadPass& t, double depth, std::uint32_t col);
   void threading_cycle(std::uint32_t col);
   bool in_sync_ = false;  // the last move emitted followed the spindle
+  // Stamped on the synchronised lines emitted: G33/G76 D (degrees past the index, NaN: none)
+  // and which move of a G33.1 rigid tap is being emitted.
+  double sync_start_deg_ = std::numeric_limits<double>::quiet_NaN();
+  RigidTap sync_tap_ = RigidTap::kNone;
+  double start_angle_word() const;
 
   // lathe_cycles.cpp: G70, G71, G72 (the profile's subroutine is read while lathe_capture_ is
   // set: its lines add to the profile instead of executing)

@@ -10,7 +10,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <utility>
 
 #include "core/error.hpp"
 #include "interpreter/interpreter_impl.hpp"
@@ -182,6 +184,8 @@ void Interpreter::Impl::emit_sync_line(const AxisVec& target, double mm_rev, std
   b.col = col;
   b.feed_mm_min = feed;
   b.sync_mm_rev = mm_rev;
+  b.sync_start_deg = sync_start_deg_;
+  b.rigid_tap = sync_tap_;
   b.override_fixed = true;
   set_path_mode(b);
   out_.push_back(b);
@@ -198,9 +202,17 @@ double Interpreter::Impl::pitch_word(const char* what) const {
   return w['k'].value * modal_.length_unit_mm();
 }
 
-// G33 X Y Z K: a move that follows the spindle.
+// D of G33 / G76: the spindle angle past the index where the thread starts; LinuxCNC takes a
+// negative D by its magnitude.
+double Interpreter::Impl::start_angle_word() const {
+  return words_.has('d') ? std::fabs(words_['d'].value) : std::numeric_limits<double>::quiet_NaN();
+}
+
+// G33 X Y Z K [D]: a move that follows the spindle.
 void Interpreter::Impl::spindle_sync_motion(const AxisVec& target, std::uint32_t col) {
+  sync_start_deg_ = start_angle_word();
   emit_sync_line(target, pitch_word("G33"), col, "G33");
+  sync_start_deg_ = std::numeric_limits<double>::quiet_NaN();
 }
 
 // G33.1 X Y Z K [I]: in to the target following the spindle, stop, reverse the spindle, out to
@@ -218,6 +230,7 @@ void Interpreter::Impl::rigid_tap(const AxisVec& target, std::uint32_t col) {
   const double rpm = modal_.spindle_rpm;
   const PathMode saved = modal_.path_mode;
   modal_.path_mode = PathMode::kExactStop;
+  sync_tap_ = RigidTap::kIn;
   emit_sync_line(target, k_mm, col, "G33.1");
   emit_aux('M', dir > 0 ? 4 : 3, true);
   modal_.spindle_dir = -dir;
@@ -225,7 +238,9 @@ void Interpreter::Impl::rigid_tap(const AxisVec& target, std::uint32_t col) {
     modal_.spindle_rpm = rpm * out_factor;
     emit_aux('S', modal_.spindle_rpm, false);
   }
+  sync_tap_ = RigidTap::kOut;
   emit_sync_line(start, k_mm, col, "G33.1");
+  sync_tap_ = RigidTap::kNone;
   modal_.path_mode = saved;
   emit_aux('M', dir > 0 ? 3 : 4, true);
   modal_.spindle_dir = dir;
@@ -281,7 +296,10 @@ void Interpreter::Impl::threading_pass(const ThreadPass& t, double depth, std::u
   }
   if (t.taper_out) {
     emit_sync_line(at(cut_x, target_z + zoff - t.travel * t.taper_mm), t.pitch_mm, col, "G76");
+    // LinuxCNC stamps the start angle on every synchronised start of a pass but the exit taper's.
+    const double angle = std::exchange(sync_start_deg_, std::numeric_limits<double>::quiet_NaN());
     emit_sync_line(at(crest_x, target_z + zoff), t.taper_pitch_mm, col, "G76");
+    sync_start_deg_ = angle;
   } else {
     emit_sync_line(at(cut_x, target_z + zoff), t.pitch_mm, col, "G76");
   }
@@ -353,6 +371,7 @@ void Interpreter::Impl::threading_cycle(std::uint32_t col) {
   t.taper_out = e > 0 && (l == 2 || l == 3);
   sync_rpm(col, "G76");
 
+  sync_start_deg_ = start_angle_word();
   double depth = j;
   for (double pass = 1; depth < k; depth = j * std::pow(++pass, 1.0 / r)) {
     spend(ctx_.line, col);
@@ -362,6 +381,7 @@ void Interpreter::Impl::threading_cycle(std::uint32_t col) {
     spend(ctx_.line, col);
     threading_pass(t, k, col);
   }
+  sync_start_deg_ = std::numeric_limits<double>::quiet_NaN();
   // Back to the drive line at the thread's end.
   AxisVec end = pos_;
   end[kX] = t.start_x;

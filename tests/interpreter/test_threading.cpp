@@ -59,6 +59,18 @@ TEST(Threading, M19OrientsAndStopsTheSpindle) {
             std::string::npos);
 }
 
+// G64 R (a LinuxCNC-derived planner's scale) changes nothing; beside M19 its R is ambiguous.
+TEST(Threading, G64RChangesNothingAndBesideM19IsRefused) {
+  const auto plain = blocks("G21 G64 P0.1\nG1 X10 F100\n");
+  const auto with_r = blocks("G21 G64 P0.1 R0.5\nG1 X10 F100\n");
+  ASSERT_EQ(plain.size(), with_r.size());
+  EXPECT_EQ(plain.back().path_mode, with_r.back().path_mode);
+  EXPECT_EQ(plain.back().tolerance_mm, with_r.back().tolerance_mm);
+  EXPECT_NE(error_of("G64 R-1\n").find("thread.ngc:1:5: error: negative G64 R"), std::string::npos);
+  EXPECT_NE(error_of("G64 M19 R90 S0\n").find("thread.ngc:1:9: error: R is ambiguous"),
+            std::string::npos);
+}
+
 // As rs274 lists them: the pitch before the synchronised moves, no DWELL for the index wait.
 TEST(Threading, CanonicalListingHasTheSyncCallsAndNoIndexWait) {
   Interpreter in(Interpreter::FromText{}, "G18 G21 G90 S400 M3\nG0 X10 Z5\nG33 Z-40 K1.5\nG0 X20\n",
@@ -73,6 +85,38 @@ TEST(Threading, CanonicalListingHasTheSyncCallsAndNoIndexWait) {
             "STRAIGHT_FEED(10.0000, 0.0000, -40.0000, 0.0000, 0.0000, 0.0000)\n"
             "STOP_SPEED_FEED_SYNCH()\n"
             "STRAIGHT_TRAVERSE(20.0000, 0.0000, -40.0000, 0.0000, 0.0000, 0.0000)\n");
+}
+
+std::string canon_of(const std::string& text) {
+  Interpreter in(Interpreter::FromText{}, text, "thread.ngc", test_machine(), Options{});
+  CanonPrinter p;
+  std::string canon;
+  Block b;
+  while (in.next(b)) canon += p.print(b, in.canon_frame());
+  return canon;
+}
+
+// D reaches the listing as the start angle of each synchronisation (its magnitude), and a
+// G33.1 is LinuxCNC's one RIGID_TAP call, the way out below the interface.
+TEST(Threading, CanonicalListingCarriesTheStartAngleAndOneRigidTap) {
+  EXPECT_EQ(canon_of("G18 G21 G90 S400 M3\nG0 X10 Z5\nG33 Z-40 K1.5 D-90\nG0 X20\n"),
+            "STRAIGHT_TRAVERSE(10.0000, 0.0000, 5.0000, 0.0000, 0.0000, 0.0000)\n"
+            "START_SPEED_FEED_SYNC(1.500000,0,90.000000)\n"
+            "STRAIGHT_FEED(10.0000, 0.0000, -40.0000, 0.0000, 0.0000, 0.0000)\n"
+            "STOP_SPEED_FEED_SYNCH()\n"
+            "STRAIGHT_TRAVERSE(20.0000, 0.0000, -40.0000, 0.0000, 0.0000, 0.0000)\n");
+  EXPECT_EQ(canon_of("G17 G21 G90 S300 M3\nG0 X5 Y5 Z2\nG33.1 Z-10 K1.25\nG0 Z20\n"),
+            "STRAIGHT_TRAVERSE(5.0000, 5.0000, 2.0000, 0.0000, 0.0000, 0.0000)\n"
+            "START_SPEED_FEED_SYNC(1.250000,0)\n"
+            "RIGID_TAP(5.0000, 5.0000, -10.0000)\n"
+            "STOP_SPEED_FEED_SYNCH()\n"
+            "STRAIGHT_TRAVERSE(5.0000, 5.0000, 20.0000, 0.0000, 0.0000, 0.0000)\n");
+  // G76 with an exit taper: every start of a pass has the angle but the exit taper's.
+  const std::string g76 =
+      canon_of("G18 G21 G90 S500 M3\nG0 X20 Z5\nG76 P2 Z-30 I-1 J1 K1 E2 L2 D30\n");
+  EXPECT_NE(g76.find("START_SPEED_FEED_SYNC(2.000000,0,30.000000)"), std::string::npos) << g76;
+  EXPECT_NE(g76.find("START_SPEED_FEED_SYNC(2.236068,0)"), std::string::npos) << g76;
+  EXPECT_EQ(g76.find("2.236068,0,30"), std::string::npos) << g76;
 }
 
 TEST(Threading, RigidTapGoesInReversesAndComesBackFaster) {
