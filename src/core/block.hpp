@@ -61,8 +61,7 @@ struct Block {
   bool override_fixed = false;
   // Spindle-synchronised motion (G33, G33.1, G76): the path advances sync_mm_rev per spindle
   // revolution, so feed_mm_min = sync_mm_rev · rpm and override_fixed is set (the feed override
-  // does not act, as in LinuxCNC). 0: a move at its programmed feed. On a zero kDwell: the wait
-  // for the spindle's index pulse before such moves.
+  // does not act, as in LinuxCNC). 0: a move at its programmed feed.
   double sync_mm_rev = 0;
   // G33 / G76 D: the spindle angle past its index (degrees, >= 0) at which the synchronised
   // move starts; NaN: none programmed (the index itself).
@@ -79,6 +78,9 @@ struct Block {
 
   // kDwell
   double dwell_s = 0;
+  // A zero dwell that waits for the spindle's index pulse before synchronised moves (not a G4 of
+  // the program; below LinuxCNC's canonical interface).
+  bool index_wait = false;
 
   // kAux: letter 'M', 'S' or 'T' with its value (M6 → 'M', 6; S12000 → 'S', 12000).
   char aux_letter = 0;

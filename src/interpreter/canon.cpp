@@ -107,7 +107,7 @@ std::string CanonPrinter::print(const Block& b, const CanonFrame& f) {
     }
     case BlockKind::kDwell:
       // The index wait before synchronised moves is below the canonical interface in LinuxCNC.
-      if (b.sync_mm_rev <= 0) out += fmt::format("DWELL({})\n", num(b.dwell_s));
+      if (!b.index_wait) out += fmt::format("DWELL({})\n", num(b.dwell_s));
       break;
     case BlockKind::kAux:
       break;

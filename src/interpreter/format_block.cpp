@@ -1,9 +1,11 @@
 // The `cncore check --blocks` line format (documented in docs/gcode.md):
 //   N<line> RAPID from <axes> to <axes>[ <path>]
-//   N<line> LINE from <axes> to <axes> F<feed>[ <path>]
+//   N<line> LINE from <axes> to <axes> F<feed>[ <sync>][ <path>]
 //   N<line> ARC from <axes> to <axes> centre <x y z> normal <±X|±Y|±Z> turns <n> F<feed>[ <path>]
-//   N<line> DWELL <seconds> s
+//   N<line> DWELL <seconds> s[ INDEX]
 //   N<line> AUX <M|S|T><value>[ P<p> (M52)][ WAIT]
+// <sync> is SYNC <mm/rev>[ START <deg>][ TAP IN|TAP OUT] (G33, G33.1, G76); INDEX marks the
+// wait for the spindle's index pulse before them.
 // <path> is EXACT_PATH (G61), EXACT_STOP (G61.1, G9) or TOL <mm> (G64 P); nothing for G64.
 // Positions %.4f (mm, deg), feed %.3f mm/min.
 #include <fmt/format.h>
@@ -35,6 +37,14 @@ void append_axes(std::string& s, const AxisVec& p, const std::array<bool, kMaxAx
     first = false;
     append_num(s, p[a]);
   }
+}
+
+void append_sync(std::string& s, const Block& b) {
+  if (b.sync_mm_rev <= 0) return;
+  s += fmt::format(" SYNC {:.4f}", b.sync_mm_rev);
+  if (!std::isnan(b.sync_start_deg)) s += fmt::format(" START {:.4f}", b.sync_start_deg);
+  if (b.rigid_tap == RigidTap::kIn) s += " TAP IN";
+  if (b.rigid_tap == RigidTap::kOut) s += " TAP OUT";
 }
 
 std::string format_with(const Block& b, const std::array<bool, kMaxAxes>& axes) {
@@ -83,11 +93,13 @@ std::string format_with(const Block& b, const std::array<bool, kMaxAxes>& axes) 
         s += fmt::format(" turns {}", b.turns);
       }
       if (b.kind != BlockKind::kRapid) s += fmt::format(" F{:.3f}", b.feed_mm_min);
+      append_sync(s, b);
       path();
       break;
     }
     case BlockKind::kDwell:
       s += fmt::format("DWELL {:.3f} s", b.dwell_s);
+      if (b.index_wait) s += " INDEX";
       break;
     case BlockKind::kAux: {
       s += "AUX ";

@@ -19,6 +19,9 @@
 
 namespace cncore::interp {
 
+// #5070, as in LinuxCNC: 1 when the last G38 move tripped the probe, else 0.
+inline constexpr int kParamProbeTripped = 5070;
+
 struct Options {
   std::map<int, double> params;                // --param N=V: numbered parameters #N
   std::map<std::string, double> named_params;  // --var NAME=V: named parameters #<NAME>

@@ -54,7 +54,6 @@ inline constexpr int kParamTool = 5400;
 inline constexpr int kParamPosition = 5420;
 inline constexpr int kParamMachinePosition = 5021;  // current machine position X…C
 inline constexpr int kParamProbe = 5061;            // G38 trip point X…W, program coordinates
-inline constexpr int kParamProbeTripped = 5070;     // 1: the last G38 move tripped the probe
 // The XY rotation (G10 L2 R, degrees) of a system is its tenth number, after X Y Z A B C U V W:
 // work_param(system, kRotationSlot), #5230 for G54.
 inline constexpr std::size_t kRotationSlot = 9;

@@ -176,7 +176,7 @@ void Interpreter::Impl::emit_sync_line(const AxisVec& target, double mm_rev, std
   if (!in_sync_) {
     Block wait = base_block(BlockKind::kDwell);
     wait.dwell_s = 0;
-    wait.sync_mm_rev = mm_rev;  // marks the index wait (no G4 of the program)
+    wait.index_wait = true;
     out_.push_back(wait);
   }
   Block b = base_block(BlockKind::kLine);

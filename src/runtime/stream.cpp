@@ -116,9 +116,9 @@ std::string StreamChecker::check(const std::string& line, const MachineConfig& m
     }
     modal = in.modal_state();
     params = in.numbered_parameters(kFirstPersistentParameter, kLastPersistentParameter);
-    // #5070 is LinuxCNC's "the last G38 tripped"; it starts each checked line at 0.
-    constexpr int kTripped = 5070;
-    probe_tripped = in.numbered_parameters(kTripped, kTripped).at(kTripped) != 0;
+    // It starts each checked line at 0.
+    probe_tripped = in.numbered_parameters(interp::kParamProbeTripped, interp::kParamProbeTripped)
+                        .at(interp::kParamProbeTripped) != 0;
     probed = moved && modal->motion == interp::Motion::kProbe;
     position = end;
   } catch (const InputError& e) {

@@ -29,7 +29,7 @@ TEST(Threading, G33FollowsTheSpindleAndStartsFromRest) {
   std::size_t waits = 0;
   for (const Block& x : b) {
     if (x.kind == BlockKind::kLine && x.sync_mm_rev > 0) sync.push_back(x);
-    if (x.kind == BlockKind::kDwell && x.dwell_s == 0 && x.sync_mm_rev > 0) ++waits;
+    if (x.kind == BlockKind::kDwell && x.dwell_s == 0 && x.index_wait) ++waits;
   }
   ASSERT_EQ(sync.size(), 2U);
   EXPECT_DOUBLE_EQ(sync[0].feed_mm_min, 1.5 * 400);
@@ -117,6 +117,24 @@ TEST(Threading, CanonicalListingCarriesTheStartAngleAndOneRigidTap) {
   EXPECT_NE(g76.find("START_SPEED_FEED_SYNC(2.000000,0,30.000000)"), std::string::npos) << g76;
   EXPECT_NE(g76.find("START_SPEED_FEED_SYNC(2.236068,0)"), std::string::npos) << g76;
   EXPECT_EQ(g76.find("2.236068,0,30"), std::string::npos) << g76;
+}
+
+// `check --blocks` shows which moves follow the spindle: the pitch, D's start angle, the rigid
+// tap's way in and out, and the index wait before a series.
+TEST(Threading, BlockListingMarksSynchronisedMoves) {
+  const MachineConfig m = test_machine();
+  const auto g33 = listing("G18 G21 G90 S400 M3\nG0 X10 Z5\nG33 Z-40 K1.5 D-90\nG0 X20\n", m);
+  ASSERT_EQ(g33.size(), 6U);
+  EXPECT_EQ(g33[3], "N3 DWELL 0.000 s INDEX");
+  EXPECT_NE(g33[4].find(" F600.000 SYNC 1.5000 START 90.0000"), std::string::npos) << g33[4];
+  EXPECT_EQ(g33[5].find("SYNC"), std::string::npos) << g33[5];
+  const auto tap = listing("G17 G21 G90 S300 M3\nG0 X5 Y5 Z2\nG33.1 Z-10 K1.25\nG0 Z20\n", m);
+  std::vector<std::string> marks;
+  for (const std::string& line : tap) {
+    if (line.find("TAP IN") != std::string::npos) marks.emplace_back("in");
+    if (line.find("TAP OUT") != std::string::npos) marks.emplace_back("out");
+  }
+  EXPECT_EQ(marks, (std::vector<std::string>{"in", "out"}));
 }
 
 TEST(Threading, RigidTapGoesInReversesAndComesBackFaster) {
