@@ -15,6 +15,7 @@ namespace cncore::app {
 int command_check(const CheckArgs& a) {
   const MachineConfig machine = machine_from(a.machine);
   interp::Options options = interpreter_options(a.vars, a.params, a.tool_table);
+  options.subroutine_path = a.subroutine_path;
   std::string out;
   if (a.canon) {
     // As LinuxCNC's listing: moves that go nowhere and the operator messages, in program order.

@@ -15,7 +15,8 @@ struct RunArgs {
   std::string accdec;  // --accdec; empty: the machine's [motion] accdec
   std::optional<double> override_pct;
   std::vector<std::string> override_at, vars, params;
-  std::string tool_table;  // --tool-table FILE.tbl (LinuxCNC format)
+  std::string tool_table;                    // --tool-table FILE.tbl (LinuxCNC format)
+  std::vector<std::string> subroutine_path;  // --subroutine-path DIR (repeatable)
   std::string correction;  // --correction on|off; empty: [direction_correction] enabled
   std::string report;      // --report FILE.html
   std::string adaptive;    // --adaptive on|off; empty: adaptive.enabled of the configuration
@@ -33,7 +34,8 @@ struct CheckArgs {
   bool blocks = false;
   bool canon = false;  // --canon: LinuxCNC's canonical-machine calls
   std::vector<std::string> vars, params;
-  std::string tool_table;  // --tool-table FILE.tbl (LinuxCNC format)
+  std::string tool_table;                    // --tool-table FILE.tbl (LinuxCNC format)
+  std::vector<std::string> subroutine_path;  // --subroutine-path DIR (repeatable)
 };
 
 int command_check(const CheckArgs& a);
@@ -61,6 +63,7 @@ struct ServeArgs {
   std::string mqtt_user, mqtt_password_file, mqtt_ca;
   double mqtt_rate_hz = 10;  // --mqtt-rate: samples per second
   bool start = false, no_state = false, no_realtime = false;
+  std::vector<std::string> subroutine_path;  // --subroutine-path DIR (repeatable)
 };
 
 int command_serve(const ServeArgs& a);

@@ -69,6 +69,15 @@ void add_progress_option(CLI::App& command, std::string& mode) {
       ->type_name("auto|on|off|json");
 }
 
+void add_subroutine_path_option(CLI::App& command, std::vector<std::string>& dirs) {
+  command
+      .add_option("--subroutine-path", dirs,
+                  "Folder where `o<name> call` finds name.ngc when the program does not define "
+                  "o<name>, after the program's own folder (repeatable, searched in order)")
+      ->allow_extra_args(false)
+      ->type_name("DIR");
+}
+
 // `--progress` alone means `--progress=on`: rewritten before parsing, so that it never takes the
 // program's name as its value.
 std::vector<std::string> with_bare_progress_on(int argc, char** argv) {
@@ -159,6 +168,7 @@ int main_cli(int argc, char** argv) {
          "--tool-table", ra.tool_table,
          "Tool table in LinuxCNC's format (T1 P1 Z12.5 D6), mm; replaces [[tools]] entries")
       ->type_name("FILE.tbl");
+  add_subroutine_path_option(*run, ra.subroutine_path);
 
   CheckArgs ca;
   CLI::App* check = app.add_subcommand("check", "Interpret a program only and report every error.");
@@ -181,6 +191,7 @@ int main_cli(int argc, char** argv) {
                    "Tool table in LinuxCNC's format (T1 P1 Z12.5 D6), mm; replaces [[tools]] "
                    "entries")
       ->type_name("FILE.tbl");
+  add_subroutine_path_option(*check, ca.subroutine_path);
 
   TableArgs ta;
   CLI::App* table = app.add_subcommand(
@@ -252,6 +263,7 @@ int main_cli(int argc, char** argv) {
   serve->add_flag("--no-state", sa.no_state, "Keep no machine state between runs");
   serve->add_option("--program", sa.program, "Load this program at start")->type_name("FILE.ngc");
   serve->add_flag("--start", sa.start, "Start the --program at once");
+  add_subroutine_path_option(*serve, sa.subroutine_path);
   serve->add_option("--trajectory", sa.trajectory, "Record every served cycle as CSV")
       ->type_name("FILE.csv");
   serve->add_flag("--no-realtime", sa.no_realtime, "Do not ask for SCHED_FIFO and mlockall");

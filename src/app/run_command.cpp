@@ -114,6 +114,7 @@ int command_run(const RunArgs& a) {
     }
   }
   options.interpreter = interpreter_options(a.vars, a.params, a.tool_table);
+  options.interpreter.subroutine_path = a.subroutine_path;
   if (a.dry_run_feed_mm_min) {
     if (!(*a.dry_run_feed_mm_min > 0) || !std::isfinite(*a.dry_run_feed_mm_min))
       throw UsageError("--dry-run: the feed must be a number > 0 (mm/min)");

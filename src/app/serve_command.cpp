@@ -47,6 +47,7 @@ void install_stop_handlers() {
 
 runtime::ControllerOptions controller_options(const ServeArgs& a) {
   runtime::ControllerOptions o;
+  o.subroutine_path = a.subroutine_path;
   if (a.servo == "sim") {
     o.servo = runtime::ServoKind::kSim;
   } else if (a.servo.starts_with("udp:")) {

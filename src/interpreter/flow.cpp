@@ -192,8 +192,8 @@ OKeyword Interpreter::Impl::skip_to(const OWord& from, std::initializer_list<OKe
   const std::uint32_t col = from.col;
   std::string_view raw;
   OWord o;
-  while (reader_.next(raw)) {
-    ctx_.line = reader_.current().line;
+  while (reader_->next(raw)) {
+    ctx_.line = reader_->current().line;
     normalize_line(raw, line_, ctx_);
     if (skipped() || line_.text.empty()) continue;
     if (!parse_oword(o) || o.label != from.label) continue;
@@ -209,8 +209,8 @@ OKeyword Interpreter::Impl::skip_to(const OWord& from, std::initializer_list<OKe
 // Skips the body of a Fanuc subprogram ("O1000" … "M99").
 void Interpreter::Impl::skip_fanuc_sub(std::uint32_t def_line) {
   std::string_view raw;
-  while (reader_.next(raw)) {
-    ctx_.line = reader_.current().line;
+  while (reader_->next(raw)) {
+    ctx_.line = reader_->current().line;
     normalize_line(raw, line_, ctx_);
     const std::string& t = line_.text;
     for (std::size_t p = t.find("m99"); p != std::string::npos; p = t.find("m99", p + 1)) {
@@ -224,12 +224,34 @@ void Interpreter::Impl::skip_fanuc_sub(std::uint32_t def_line) {
 // been seen yet. Keys: "100", "<name>" for O-word subs; "F1000" for Fanuc subprograms.
 const SubDef* Interpreter::Impl::find_sub(const std::string& key, std::uint32_t col) {
   if (auto it = subs_.find(key); it != subs_.end()) return &it->second;
+  // A subroutine's own file holds that subroutine only, and streamed lines cannot be read
+  // ahead: there, a subroutine not met yet can only come from its file.
+  if (source_ == 0 && !reader_->is_pulled()) {
+    if (const SubDef* def = scan_for_sub(key)) return def;
+  }
+  if (!key.empty() && key[0] == '<') {
+    if (const SubDef* def = load_sub_file(key, col)) return def;
+  }
+  const bool fanuc = !key.empty() && key[0] == 'F';
+  throw InputError(
+      file_, ctx_.line, col,
+      fanuc ? fmt::format("subprogram O{} is not defined in this file", key.substr(1))
+      : key[0] == '<'
+          ? fmt::format("subroutine {} is not defined in this file, and no {}.ngc is in the "
+                        "program's folder or on the subroutine path",
+                        display(key), printable(key.substr(1, key.size() - 2)))
+          : fmt::format("subroutine {} is not defined in this file", display(key)));
+}
+
+// Reads ahead in the program for `key`, recording every definition met; back where it was
+// when the program does not define it.
+const SubDef* Interpreter::Impl::scan_for_sub(const std::string& key) {
   const std::uint32_t line = ctx_.line;
-  const LinePos resume = reader_.following();
+  const LinePos resume = reader_->following();
   std::string_view raw;
   OWord o;
-  while (reader_.next(raw)) {
-    ctx_.line = reader_.current().line;
+  while (reader_->next(raw)) {
+    ctx_.line = reader_->current().line;
     normalize_line(raw, line_, ctx_);
     if (skipped() || line_.text.empty() || !parse_oword(o)) continue;
     std::string k;
@@ -240,14 +262,12 @@ const SubDef* Interpreter::Impl::find_sub(const std::string& key, std::uint32_t 
     } else {
       continue;
     }
-    auto [it, inserted] = subs_.try_emplace(k, SubDef{reader_.following(), ctx_.line});
+    auto [it, inserted] = subs_.try_emplace(k, SubDef{reader_->following(), ctx_.line, source_});
     if (k == key) return &it->second;
   }
-  reader_.seek(resume);
-  const bool fanuc = !key.empty() && key[0] == 'F';
-  throw InputError(file_, line, col,
-                   fanuc ? fmt::format("subprogram O{} is not defined in this file", key.substr(1))
-                         : fmt::format("subroutine {} is not defined in this file", display(key)));
+  reader_->seek(resume);
+  ctx_.line = line;
+  return nullptr;
 }
 
 void Interpreter::Impl::execute_oword(const OWord& o) {
@@ -261,7 +281,7 @@ void Interpreter::Impl::execute_oword(const OWord& o) {
         main_titled_ = true;
         return;
       }
-      subs_.try_emplace("F" + o.label, SubDef{reader_.following(), ctx_.line});
+      subs_.try_emplace("F" + o.label, SubDef{reader_->following(), ctx_.line, source_});
       skip_fanuc_sub(ctx_.line);
       return;
     }
@@ -269,7 +289,12 @@ void Interpreter::Impl::execute_oword(const OWord& o) {
       if (!frames_.empty() && !frames_.back().fanuc && frames_.back().label == o.label) {
         fail(o.col, fmt::format("{} sub defined inside itself", display(o.label)));
       }
-      subs_.try_emplace(o.label, SubDef{reader_.following(), ctx_.line});
+      if (source_ != 0) {
+        fail(o.col, fmt::format("{} sub in the file of {}: a subroutine's file defines that "
+                                "subroutine only",
+                                display(o.label), display(frames_.back().label)));
+      }
+      subs_.try_emplace(o.label, SubDef{reader_->following(), ctx_.line, source_});
       skip_to(o, {OKeyword::kEndSub}, "endsub");
       return;
     }
@@ -297,14 +322,14 @@ void Interpreter::Impl::execute_oword(const OWord& o) {
           loops_.back().kind != Loop::Kind::kWhile) {
         fail(o.col, fmt::format("{} endwhile without while", display(o.label)));
       }
-      reader_.seek(loops_.back().head);
+      reader_->seek(loops_.back().head);
       return;
     }
     case OKeyword::kDo: {
       Loop l;
       l.label = o.label;
       l.kind = Loop::Kind::kDo;
-      l.head = reader_.following();
+      l.head = reader_->following();
       l.line = ctx_.line;
       l.col = o.col;
       loops_.push_back(l);
@@ -345,7 +370,7 @@ void Interpreter::Impl::return_from_sub(const OWord& o) {
   frames_.pop_back();
   loops_.resize(f.loop_depth);
   params_.pop_scope();
-  reader_.seek(f.return_to);
+  enter(f.return_source, f.return_to);
 }
 
 // o<name> call [e1] [e2] …: the arguments become #1, #2, … of the new scope.
@@ -365,7 +390,8 @@ void Interpreter::Impl::call_sub(const OWord& o) {
   spend(ctx_.line, o.col);
   Frame f;
   f.label = o.label;
-  f.return_to = reader_.following();
+  f.return_to = reader_->following();
+  f.return_source = source_;
   f.loop_depth = loops_.size();
   f.line = ctx_.line;
   f.col = o.col;
@@ -375,7 +401,7 @@ void Interpreter::Impl::call_sub(const OWord& o) {
   frames_.push_back(f);
   params_.push_scope(args);
   params_.set_named("_value_returned", 0);
-  reader_.seek(def->body);
+  enter(def->source, def->body);
 }
 
 // if / elseif / else: run the first branch whose condition holds; "elseif"/"else" met
@@ -398,20 +424,20 @@ void Interpreter::Impl::run_while(const OWord& o) {
     // The end of a do … while loop.
     if (condition(o) != 0) {
       count_iteration(*top);
-      reader_.seek(top->head);
+      reader_->seek(top->head);
     } else {
       loops_.pop_back();
     }
     return;
   }
   if (top != nullptr && top->label == o.label && top->kind == Loop::Kind::kWhile &&
-      top->head.offset == reader_.current().offset) {
+      top->head.offset == reader_->current().offset) {
     count_iteration(*top);  // back at the head after endwhile or continue
   } else {
     Loop l;
     l.label = o.label;
     l.kind = Loop::Kind::kWhile;
-    l.head = reader_.current();
+    l.head = reader_->current();
     l.line = ctx_.line;
     l.col = o.col;
     loops_.push_back(l);
@@ -431,7 +457,7 @@ void Interpreter::Impl::run_repeat(const OWord& o) {
   Loop l;
   l.label = o.label;
   l.kind = Loop::Kind::kRepeat;
-  l.head = reader_.following();
+  l.head = reader_->following();
   l.remaining = count;
   l.line = ctx_.line;
   l.col = o.col;
@@ -452,7 +478,7 @@ void Interpreter::Impl::end_repeat(const OWord& o) {
   count_iteration(l);
   l.remaining -= 1;
   if (l.remaining > 0) {
-    reader_.seek(l.head);
+    reader_->seek(l.head);
   } else {
     loops_.pop_back();
   }
@@ -504,7 +530,8 @@ void Interpreter::Impl::call_fanuc(std::uint32_t col) {
   Frame f;
   f.label = label;
   f.fanuc = true;
-  f.return_to = reader_.following();
+  f.return_to = reader_->following();
+  f.return_source = source_;
   f.loop_depth = loops_.size();
   f.line = ctx_.line;
   f.col = col;
@@ -513,7 +540,7 @@ void Interpreter::Impl::call_fanuc(std::uint32_t col) {
   f.body = def->body;
   f.def_line = def->line;
   frames_.push_back(f);
-  reader_.seek(def->body);
+  enter(def->source, def->body);
 }
 
 // M99: end of a Fanuc subprogram; repeat it while L count remains, else return.
@@ -531,12 +558,13 @@ void Interpreter::Impl::return_fanuc(std::uint32_t col) {
   loops_.resize(f.loop_depth);
   spend(f.line, f.col);
   if (--f.repeats_left > 0) {
-    reader_.seek(f.body);
+    reader_->seek(f.body);
     return;
   }
   const LinePos back = f.return_to;
+  const std::size_t source = f.return_source;
   frames_.pop_back();
-  reader_.seek(back);
+  enter(source, back);
 }
 
 void Interpreter::Impl::end_of_file() {

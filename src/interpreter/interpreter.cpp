@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include "core/error.hpp"
 #include "interpreter/interpreter_impl.hpp"
@@ -15,7 +16,12 @@
 namespace cncore::interp {
 
 Interpreter::Impl::Impl(LineReader r, std::string name, MachineConfig m, const Options& options)
-    : file_(std::move(name)), machine_(std::move(m)), reader_(std::move(r)) {
+    : file_(std::move(name)),
+      program_file_(file_),
+      machine_(std::move(m)),
+      sub_dirs_(options.subroutine_path) {
+  sources_.push_back(std::make_unique<Source>(Source{std::move(r), file_}));
+  reader_ = &sources_[0]->reader;
   ctx_.file = &file_;
   params_.set_live(this);
   for (std::size_t a = 0; a < kMaxAxes; ++a) pos_[a] = machine_.start_position[a];
@@ -89,12 +95,12 @@ bool Interpreter::Impl::recover() {
 
 void Interpreter::Impl::step() {
   std::string_view raw;
-  if (!reader_.next(raw)) {
+  if (!reader_->next(raw)) {
     at_eof_ = true;
     end_of_file();
     return;
   }
-  ctx_.line = reader_.current().line;
+  ctx_.line = reader_->current().line;
   normalize_line(raw, line_, ctx_);
   if (skipped()) return;
   if (line_.percent) {
@@ -278,8 +284,8 @@ void Interpreter::Impl::parse_words(std::size_t pos) {
 Block Interpreter::Impl::base_block(BlockKind kind) const {
   Block b;
   b.kind = kind;
-  b.line = ctx_.line;
-  b.col = words_.first_col;
+  b.line = source_ == 0 ? ctx_.line : entry_line_;
+  b.col = source_ == 0 ? words_.first_col : entry_col_;
   b.start = pos_;
   b.end = pos_;
   return b;
@@ -680,7 +686,11 @@ void Interpreter::Impl::execute_stops() {
 
 Interpreter::Interpreter(const std::string& path, const MachineConfig& machine,
                          const Options& options)
-    : impl_(std::make_unique<Impl>(LineReader::open_file(path), path, machine, options)) {}
+    : impl_(std::make_unique<Impl>(LineReader::open_file(path), path, machine, options)) {
+  // The program's own folder is searched first for the files of its subroutines.
+  impl_->sub_dirs_.insert(impl_->sub_dirs_.begin(),
+                          std::filesystem::path(path).parent_path().string());
+}
 
 Interpreter::Interpreter(FromText, std::string text, std::string name, const MachineConfig& machine,
                          const Options& options)
@@ -691,7 +701,7 @@ Interpreter::Interpreter(FromLines, LineReader::Pull pull, std::string name,
                          const MachineConfig& machine, const Options& options)
     : impl_(std::make_unique<Impl>(LineReader::pulled(std::move(pull)), std::move(name), machine,
                                    options)) {
-  impl_->reader_.set_name(impl_->file_);
+  impl_->reader_->set_name(impl_->file_);
 }
 
 Interpreter::~Interpreter() = default;

@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "config/machine_config.hpp"
 #include "config/tool_table.hpp"
@@ -28,6 +29,9 @@ struct Options {
   // The modal state to start in (a controller carries it from one MDI line or program to the
   // next); none: the defaults (G17 G21 G90 G54 G64 G80).
   std::optional<ModalState> modal;
+  // --subroutine-path DIR: where `o<name> call` of a subroutine the program does not define
+  // looks for name.ngc, after the program's own folder (LinuxCNC's SUBROUTINE_PATH).
+  std::vector<std::string> subroutine_path;
   ToolTable tools;  // --tool-table FILE: replaces the machine's [[tools]] entries it lists
   // A tool missing from the table is an error (default: when the machine or `tools` lists any).
   std::optional<bool> tools_listed;

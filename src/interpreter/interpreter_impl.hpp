@@ -151,12 +151,21 @@ struct OWord {
 struct SubDef {
   LinePos body;  // the line after "oN sub" (or after the Fanuc "O1000" line)
   std::uint32_t line = 0;
+  std::size_t source = 0;  // the file it is in (Impl::sources_)
+};
+
+// A file the interpreter reads: the program (sources_[0]), or the file of a subroutine that
+// `o<name> call` found on the subroutine path (name.ngc).
+struct Source {
+  LineReader reader;
+  std::string file;
 };
 
 struct Frame {
   std::string label;
-  LinePos return_to;  // the line after the call
-  LinePos body;       // for M98 repeats
+  LinePos return_to;              // the line after the call
+  std::size_t return_source = 0;  // the file of the call
+  LinePos body;                   // for M98 repeats
   std::size_t loop_depth = 0;
   std::uint32_t line = 0, col = 0;  // the call
   std::uint32_t def_line = 0;       // where the subroutine is defined
@@ -328,20 +337,34 @@ struct Interpreter::Impl final : LiveParameters {
   OKeyword skip_to(const OWord& from, std::initializer_list<OKeyword> stops, const char* what);
   void skip_fanuc_sub(std::uint32_t def_line);
   const SubDef* find_sub(const std::string& key, std::uint32_t col);
-  void call_fanuc(std::uint32_t col);    // M98
-  void return_fanuc(std::uint32_t col);  // M99
+  const SubDef* scan_for_sub(const std::string& key);
+  // sub_files.cpp: the subroutine `key` ("<name>") from name.ngc on the subroutine path; null
+  // when no such file exists.
+  const SubDef* load_sub_file(const std::string& key, std::uint32_t col);
+  void enter(std::size_t source, LinePos pos);  // reads on from `pos` in sources_[source]
+  void call_fanuc(std::uint32_t col);           // M98
+  void return_fanuc(std::uint32_t col);         // M99
   void end_of_file();
   double condition(const OWord& o);
   [[noreturn]] void loop_limit(const Loop& loop) const;
   void count_iteration(Loop& loop);
   void spend(std::uint32_t line, std::uint32_t col);  // one pass of the program's budget
 
-  std::string file_;
+  std::string file_;  // the file being read (the program, or a subroutine's file)
+  // The program (sources_[0]). Blocks made in a subroutine's file carry the line and column of
+  // the call that entered it from the program, so that everything after the interpreter (the
+  // run's report, the operator's current line, cutter compensation's errors) names the program.
+  std::string program_file_;
+  std::uint32_t entry_line_ = 0, entry_col_ = 0;
   MachineConfig machine_;
   bool block_delete_ = true;
   std::function<void(const std::string&)> on_message_;
   bool zero_length_moves_ = false;
-  LineReader reader_;
+  // The files read (the program first); reader_ is the one being read, sources_[source_].
+  std::vector<std::unique_ptr<Source>> sources_;
+  std::size_t source_ = 0;
+  LineReader* reader_ = nullptr;
+  std::vector<std::string> sub_dirs_;  // where o<name> call looks for name.ngc, in order
   NormLine line_;
   ErrorContext ctx_;
   Parameters params_;
@@ -365,7 +388,7 @@ struct Interpreter::Impl final : LiveParameters {
   AxisVec tool_offset_{};            // the active tool length offset (G43…), mm / deg
   // Cutter radius compensation: the stage the blocks of each line pass through (from
   // out_[comp_from_]; the blocks before were made under the mode before this line's G40/G41).
-  CutterComp comp_{&file_};
+  CutterComp comp_{&program_file_};
   std::size_t comp_from_ = 0;
 
   // A series of G5: where the last one ended and its second control point's offset P Q from

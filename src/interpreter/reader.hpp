@@ -44,6 +44,8 @@ class LineReader {
   // Makes next() return the line at `pos` (a position previously obtained from this reader).
   // A pulled reader can only stay where it is: it throws InputError(name, line, 0, …) otherwise.
   void seek(LinePos pos);
+  // Lines come from a pull function (no seeking back).
+  bool is_pulled() const { return static_cast<bool>(pull_); }
   // The program name a pulled reader's seek error names.
   void set_name(std::string name) { name_ = std::move(name); }
 

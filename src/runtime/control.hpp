@@ -158,6 +158,9 @@ struct ControllerOptions {
   // waits for a line, once the tool stands at the end of what it was given, before it ends.
   std::size_t stream_lines = 64;
   int stream_idle_end_ms = 100;
+  // Where `o<name> call` finds name.ngc when the program or line does not define o<name> (a
+  // program's own folder comes first).
+  std::vector<std::string> subroutine_path;
 };
 
 // What became of a streamed line.

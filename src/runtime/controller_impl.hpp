@@ -261,6 +261,7 @@ struct Controller::Impl {
     o.modal = modal;
     o.block_delete = switches.block_delete;
     o.tools = tools;
+    o.subroutine_path = options.subroutine_path;
     // Unknown tools are errors when the machine lists its tools (G10 writes do not change that).
     o.tools_listed = !machine.cutting.tools.empty();
     return o;

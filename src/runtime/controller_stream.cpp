@@ -14,6 +14,7 @@ StreamReply Controller::Impl::start_stream(const std::string& line, const Status
     next.modal = modal;
     next.params = params;
   }
+  next.subroutine_path = options.subroutine_path;
   next.position = st.commanded;
   bool ends = false;
   if (std::string e = next.check(line, machine, ends); !e.empty()) {
@@ -73,6 +74,7 @@ StreamReply Controller::stream_line(const std::string& line) {
       d.checker.modal = d.modal;
       d.checker.params = d.params;
       d.checker.position = st.commanded;
+      d.checker.subroutine_path = d.options.subroutine_path;
     }
     d.checker_in_check = true;
     std::string e = d.checker.check(line, d.machine, ends);

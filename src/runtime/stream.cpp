@@ -105,6 +105,7 @@ std::string StreamChecker::check(const std::string& line, const MachineConfig& m
   interp::Options o;
   o.params = params;
   o.modal = modal;
+  o.subroutine_path = subroutine_path;
   try {
     interp::Interpreter in(interp::Interpreter::FromText{}, line, "stream", m, o);
     Block b;

@@ -15,6 +15,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "config/machine_config.hpp"
 #include "core/geometry.hpp"
@@ -65,6 +66,7 @@ struct StreamChecker {
   // The last checked line probed (G38.2 … G38.5) and the probe tripped (#5070 after it).
   bool probed = false;
   bool probe_tripped = false;
+  std::vector<std::string> subroutine_path;  // interp::Options::subroutine_path
 
   // Interprets `line` from this state; empty and the state advanced when it is good, else the
   // error (FILE:LINE:COL: error: …) and the state as it was. `ends_program`: the line has M2

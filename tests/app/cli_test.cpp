@@ -376,6 +376,24 @@ TEST_F(Cli, ToolTableFileGivesTheLengthOffsetAndItsErrorsNameTheTable) {
   EXPECT_EQ(m.err.rfind("missing.tbl:0:0: error: cannot open the tool table", 0), 0u) << m.err;
 }
 
+TEST_F(Cli, SubroutinePathFindsTheFileOfACalledSubroutine) {
+  fs::create_directories(dir_ / "lib");
+  write_file(dir_ / "lib" / "peck.ngc", "o<peck> sub\nG1 Z#1 F300\nG0 Z5\no<peck> endsub\n");
+  write_file(dir_ / "p.ngc", "G21 G90 G0 Z5\no<peck> call [-3]\nM30\n");
+  const Result missing = run("check p.ngc");
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_EQ(missing.err.rfind("p.ngc:2:1: error: subroutine o<peck> is not defined", 0), 0u)
+      << missing.err;
+  const Result r = run("check p.ngc --blocks --subroutine-path lib");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("N2 LINE from 0.0000 0.0000 5.0000 to 0.0000 0.0000 -3.0000"),
+            std::string::npos)
+      << r.out;
+  const Result s = run("run p.ngc --subroutine-path lib --summary s.json");
+  EXPECT_EQ(s.code, 0) << s.err;
+  EXPECT_TRUE(fs::exists(dir_ / "s.json"));
+}
+
 TEST_F(Cli, CheckReportsEveryErrorWithItsLine) {
   // Errors on lines 2 (unknown word), 4 (two motion words) and 6 (division by zero, at the /).
   write_file(dir_ / "many.ngc", "G21 G90 G1 F1000\nX10 E5\nX20\nG0 G1 X30\nX40\nX[1/0]\nM30\n");

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -24,6 +25,7 @@ namespace fs = std::filesystem;
 
 struct Run {
   std::string program, tool_table;
+  std::vector<std::string> subroutine_path;  // from the INI file's [RS274NGC] SUBROUTINE_PATH
 };
 
 struct Case {
@@ -77,6 +79,27 @@ std::vector<std::string> message_lines(const std::string& text) {
   return out;
 }
 
+// The folders of an INI file's [RS274NGC] SUBROUTINE_PATH (':'-separated, relative to the
+// case); none when the file sets anything else (a machine, Python, options cncore lacks).
+std::optional<std::vector<std::string>> ini_subroutine_path(const fs::path& ini) {
+  if (!fs::exists(ini)) return std::nullopt;
+  std::istringstream in(read_text(ini.string()));
+  std::string line;
+  std::vector<std::string> dirs;
+  while (std::getline(in, line)) {
+    line = collapse_blanks(line);
+    if (line.empty() || line[0] == '#' || line[0] == ';' || line == "[RS274NGC]") continue;
+    const std::size_t eq = line.find('=');
+    if (eq == std::string::npos || collapse_blanks(line.substr(0, eq)) != "SUBROUTINE_PATH") {
+      return std::nullopt;
+    }
+    std::istringstream paths(collapse_blanks(line.substr(eq + 1)));
+    std::string dir;
+    while (std::getline(paths, dir, ':')) dirs.push_back((ini.parent_path() / dir).string());
+  }
+  return dirs;
+}
+
 // The rs274 invocations of a test.sh: "rs274 … -g PROGRAM … [-t TABLE]".
 Case read_case(const fs::path& dir, const fs::path& root) {
   Case c;
@@ -102,8 +125,13 @@ Case read_case(const fs::path& dir, const fs::path& root) {
     std::string w;
     Run r;
     while (words >> w && w != "|" && w != ">" && w != "2>&1") {
-      if (w == "-i" || w == "-p" || w == "-n") c.in_scope = false;
-      if (w == "-t") {
+      if (w == "-p" || w == "-n") c.in_scope = false;
+      if (w == "-i") {
+        words >> w;
+        const auto dirs = ini_subroutine_path(dir / w);
+        if (dirs) r.subroutine_path = *dirs;
+        c.in_scope = c.in_scope && dirs.has_value();
+      } else if (w == "-t") {
         words >> r.tool_table;
       } else if (w != "-g" && w[0] != '-' && w.find('$') == std::string::npos) {
         r.program = w;
@@ -141,9 +169,13 @@ std::vector<Case> all_cases() {
       c.dir = e.path().parent_path();
       c.name = fs::relative(c.dir, root).string();
       c.expected = e.path();
-      c.runs.push_back({"test.ngc", ""});
+      c.runs.push_back({"test.ngc", "", {}});
       // With a test.ini the runner gives rs274 that INI file (and its Python, if any).
-      c.in_scope = !fs::exists(c.dir / "test.ini");
+      if (fs::exists(c.dir / "test.ini")) {
+        const auto dirs = ini_subroutine_path(c.dir / "test.ini");
+        c.in_scope = dirs.has_value();
+        if (dirs) c.runs[0].subroutine_path = *dirs;
+      }
       cases.push_back(c);
     }
   }
@@ -154,7 +186,7 @@ std::vector<Case> all_cases() {
       Case c;
       c.dir = root / sub;
       c.name = std::string(sub) + "/" + e.path().filename().string();
-      c.runs.push_back({e.path().filename().string(), ""});
+      c.runs.push_back({e.path().filename().string(), "", {}});
       c.must_fail = std::string(sub) == "bad";
       c.expected = e.path().string() + ".expected";
       cases.push_back(c);
@@ -221,6 +253,7 @@ std::string run_case(const Case& c) {
     for (const Run& r : c.runs) {
       Options o;
       if (!r.tool_table.empty()) o.tools = inch_table((c.dir / r.tool_table).string());
+      o.subroutine_path = r.subroutine_path;
       o.zero_length_moves = true;
       o.on_message = [&](const std::string& text) { canon += "MESSAGE(\"" + text + "\")\n"; };
       Interpreter in((c.dir / r.program).string(), m, o);

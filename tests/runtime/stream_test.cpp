@@ -2,6 +2,7 @@
 // set-points the controller served against `cncore run`'s kernel on the same program.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -95,6 +96,30 @@ TEST(Stream, ACircleStreamedLineByLineRunsAsOneJobAtTheSpeedOfRun) {
   for (std::size_t i = 0; i < 3; ++i) {
     EXPECT_NEAR(sv.c().status().commanded[i], ref.back().position[i], 1e-9);
   }
+}
+
+// A streamed line calls a subroutine file from the subroutine path: its moves are served,
+// and the stream goes on after it.
+TEST(Stream, StreamedLinesCallASubroutineFile) {
+  const auto lib = std::filesystem::path(CNCORE_TEST_TMP_DIR) / "stream_subs";
+  std::filesystem::create_directories(lib);
+  std::ofstream(lib / "peck.ngc") << "o<peck> sub\nG1 Z#1 F600\nG0 Z5\no<peck> endsub\n";
+  ControllerOptions o = Served::default_options();
+  o.subroutine_path = {lib.string()};
+  Served sv(default_machine_config(), o);
+  stream_all(sv.c(), {"G21 G90 G0 X10 Z5", "o<peck> call [-3]", "G0 X20"});
+  ASSERT_TRUE(sv.wait_state(MachineState::kIdle));
+  const auto s = sv.samples();
+  double z_min = 1e9;
+  for (const motion::Sample& x : s) z_min = std::min(z_min, x.position[2]);
+  EXPECT_NEAR(z_min, -3, 0.01) << "the file's G1 Z-3 was served (within the contour tolerance)";
+  EXPECT_NEAR(sv.c().status().commanded[0], 20, 1e-9);
+  EXPECT_NEAR(sv.c().status().commanded[2], 5, 1e-9);
+  // Without the path the line is refused before anything moves.
+  Served bare(default_machine_config());
+  const StreamReply r = bare.c().stream_line("o<peck> call [-3]");
+  EXPECT_EQ(r.outcome, StreamOutcome::kRefused);
+  EXPECT_NE(r.error.find("no peck.ngc"), std::string::npos) << r.error;
 }
 
 TEST(Stream, ALineBeyondTheTravelIsRefusedBeforeMotionAndTheStreamGoesOn) {
