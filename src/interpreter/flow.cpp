@@ -184,19 +184,27 @@ void Interpreter::Impl::spend(std::uint32_t line, std::uint32_t col) {
                                machine_.max_total_iterations));
 }
 
+// Reads forward to the next line that starts with an O word, without executing the lines in
+// between; line_ holds it and `o` its O word. False at the end of the file.
+bool Interpreter::Impl::next_oword(OWord& o) {
+  std::string_view raw;
+  while (reader_->next(raw)) {
+    ctx_.line = reader_->current().line;
+    normalize_line(raw, line_, ctx_);
+    if (!skipped() && !line_.text.empty() && parse_oword(o)) return true;
+  }
+  return false;
+}
+
 // Reads forward to the O-word line with label `from.label` and one of `stops`, leaving line_
 // holding it. Lines in between are not executed.
 OKeyword Interpreter::Impl::skip_to(const OWord& from, std::initializer_list<OKeyword> stops,
                                     const char* what) {
   const std::uint32_t line = ctx_.line;
   const std::uint32_t col = from.col;
-  std::string_view raw;
   OWord o;
-  while (reader_->next(raw)) {
-    ctx_.line = reader_->current().line;
-    normalize_line(raw, line_, ctx_);
-    if (skipped() || line_.text.empty()) continue;
-    if (!parse_oword(o) || o.label != from.label) continue;
+  while (next_oword(o)) {
+    if (o.label != from.label) continue;
     for (OKeyword k : stops) {
       if (o.keyword == k) return k;
     }
@@ -248,12 +256,8 @@ const SubDef* Interpreter::Impl::find_sub(const std::string& key, std::uint32_t 
 const SubDef* Interpreter::Impl::scan_for_sub(const std::string& key) {
   const std::uint32_t line = ctx_.line;
   const LinePos resume = reader_->following();
-  std::string_view raw;
   OWord o;
-  while (reader_->next(raw)) {
-    ctx_.line = reader_->current().line;
-    normalize_line(raw, line_, ctx_);
-    if (skipped() || line_.text.empty() || !parse_oword(o)) continue;
+  while (next_oword(o)) {
     std::string k;
     if (o.keyword == OKeyword::kSub) {
       k = o.label;

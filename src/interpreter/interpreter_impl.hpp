@@ -338,6 +338,7 @@ struct Interpreter::Impl final : LiveParameters {
   void skip_fanuc_sub(std::uint32_t def_line);
   const SubDef* find_sub(const std::string& key, std::uint32_t col);
   const SubDef* scan_for_sub(const std::string& key);
+  bool next_oword(OWord& o);  // the next line starting with an O word, not executed
   // sub_files.cpp: the subroutine `key` ("<name>") from name.ngc on the subroutine path; null
   // when no such file exists.
   const SubDef* load_sub_file(const std::string& key, std::uint32_t col);

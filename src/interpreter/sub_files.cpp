@@ -55,12 +55,8 @@ const SubDef* Interpreter::Impl::load_sub_file(const std::string& key, std::uint
   sources_.push_back(std::make_unique<Source>(Source{LineReader::open_file(path), path}));
   const std::size_t source = sources_.size() - 1;
   enter(source, LinePos{});
-  std::string_view raw;
   OWord o;
-  while (reader_->next(raw)) {
-    ctx_.line = reader_->current().line;
-    normalize_line(raw, line_, ctx_);
-    if (skipped() || line_.text.empty() || !parse_oword(o)) continue;
+  while (next_oword(o)) {
     if (o.keyword == OKeyword::kSub && o.label == key) {
       const SubDef def{reader_->following(), ctx_.line, source};
       enter(caller_source, resume);
